@@ -1,0 +1,38 @@
+"""The exceptions strokeopt raises on purpose.
+
+Every error a user can cause says where (file and field) and what to change.
+The command line turns these into one line on stderr and exit code 2; anything
+else escaping is a bug in strokeopt.
+"""
+
+from __future__ import annotations
+
+
+class StrokeoptError(Exception):
+    """Base class of the errors a user can cause or act on."""
+
+
+class ProblemError(StrokeoptError, ValueError):
+    """Bad input: a problem file, a catalogue file, an option or a `--set` override.
+
+    ``str(err)`` is ``"<file>: <field>: <message>"``.
+    """
+
+    def __init__(self, file: str, field: str, message: str):
+        self.file = str(file)
+        self.field = field
+        self.message = message
+        super().__init__(f"{self.file}: {field}: {message}" if field else f"{self.file}: {message}")
+
+
+class SolverError(StrokeoptError, RuntimeError):
+    """A solve or an integration that did not succeed.
+
+    ``reason`` says which constraint or limit is to blame; ``partial`` carries
+    whatever result was reached (or None).
+    """
+
+    def __init__(self, reason: str, partial=None):
+        self.reason = reason
+        self.partial = partial
+        super().__init__(reason)

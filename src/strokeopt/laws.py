@@ -1,0 +1,270 @@
+"""Classic motion laws (cam laws) on the unit interval.
+
+A law is the normalised stroke ``y(x)`` of a rise, ``x`` in [0, 1] the
+normalised time (or cam angle) of the move and ``y(0) = 0``, ``y(1) = 1``.
+A move of stroke ``h`` and duration ``T`` is ``s = s0 + h*y(t/T)``, so
+``v = h/T*y'``, ``a = h/T^2*y''``, ``jerk = h/T^3*y'''`` (thesis eqs. 4.13-4.18).
+
+Each law is written once, with CasADi operations on a symbol, and so evaluates
+on floats, numpy arrays and CasADi SX/MX alike; its derivatives come from
+CasADi's algorithmic differentiation, and its characteristic values
+``C_v = max|y'|``, ``C_a = max|y''|``, ``C_j = max|y'''|`` are computed from
+them, never typed in.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cache
+
+import casadi as ca
+import numpy as np
+
+from ._casadi import evaluate
+from .errors import ProblemError
+
+#: Derivative orders by name, as reported by :attr:`MotionLaw.continuity`.
+DERIVATIVE_NAMES = ("position", "velocity", "acceleration", "jerk", "snap")
+
+
+def _parabolic(x):
+    # constant acceleration +4 / -4, switching at the middle
+    return ca.if_else(x < 0.5, 2 * x**2, 1 - 2 * (1 - x) ** 2)
+
+
+def _cubic(x):
+    # 3-2 polynomial: linear acceleration 6 - 12x
+    return 3 * x**2 - 2 * x**3
+
+
+def _cosine(x):
+    # simple harmonic motion
+    return (1 - ca.cos(math.pi * x)) / 2
+
+
+def _sine(x):
+    # cycloidal motion
+    return x - ca.sin(2 * math.pi * x) / (2 * math.pi)
+
+
+def _poly5(x):
+    # 3-4-5 polynomial: v = a = 0 at both ends
+    return 10 * x**3 - 15 * x**4 + 6 * x**5
+
+
+def _poly7(x):
+    # 4-5-6-7 polynomial: v = a = jerk = 0 at both ends
+    return 35 * x**4 - 84 * x**5 + 70 * x**6 - 20 * x**7
+
+
+def _modified_sine(x, chi):
+    """Modified sine with shape parameter chi (thesis section 4.4).
+
+    Acceleration: a quarter sine rising to the peak P over [0, chi], a half
+    cosine from +P to -P over [chi, 1-chi], a quarter sine back to zero over
+    [1-chi, 1]. P follows from y(1) = 1. chi = 1/8 is the classic modified
+    sine, chi = 1/4 the cycloid, chi -> 0 the cosine law.
+    """
+    w = math.pi / (2 * chi)  # quarter-sine frequency
+    span = 1 - 2 * chi  # length of the half-cosine segment
+    W = math.pi / span if span > 0 else 0.0
+    # y(1/2) = 1/2 fixes the peak: P * [(chi - 1/w)/w + span/(2w) + 1/W^2] = 1/2
+    peak = 0.5 / ((chi - 1 / w) / w + span / (2 * w) + (1 / W**2 if span > 0 else 0.0))
+
+    def rise(u):  # the first quarter sine, u in [0, chi]
+        return peak / w * (u - ca.sin(w * u) / w)
+
+    y_chi = peak / w * (chi - 1 / w)
+    v_chi = peak / w
+    u = x - chi
+    middle = y_chi + v_chi * u + (peak / W**2 * (1 - ca.cos(W * u)) if span > 0 else 0.0)
+    return ca.if_else(x < chi, rise(x), ca.if_else(x <= 1 - chi, middle, 1 - rise(1 - x)))
+
+
+@dataclass(frozen=True)
+class _LawSpec:
+    title: str
+    shape: object
+    params: dict = field(default_factory=dict)  # name -> (default, low, high, low_open)
+    breaks: object = lambda **p: ()  # interior points where the pieces join
+
+
+_LAWS: dict[str, _LawSpec] = {
+    "parabolic": _LawSpec("parabolic (constant acceleration)", _parabolic, breaks=lambda: (0.5,)),
+    "cubic": _LawSpec("cubic 3-2 polynomial (linear acceleration)", _cubic),
+    "cosine": _LawSpec("cosine (simple harmonic)", _cosine),
+    "modified_sine": _LawSpec(
+        "modified sine",
+        _modified_sine,
+        params={"chi": (0.125, 0.0, 0.25, True)},
+        breaks=lambda chi: (chi, 1 - chi),
+    ),
+    "sine": _LawSpec("sine (cycloidal)", _sine),
+    "poly5": _LawSpec("polynomial 3-4-5", _poly5),
+    "poly7": _LawSpec("polynomial 4-5-6-7", _poly7),
+}
+
+#: Names of the classic laws, in the order the thesis compares them.
+LAW_NAMES = tuple(_LAWS)
+
+
+@dataclass(frozen=True)
+class Characteristics:
+    """Characteristic values of a law: peaks of |y'|, |y''|, |y'''| on [0, 1].
+
+    ``C_j`` is ``inf`` where the acceleration jumps (at the ends against a dwell
+    or inside): the jerk is then an impulse. ``continuity`` is the highest
+    derivative order that is continuous over a dwell-move-dwell sequence
+    (1: velocity continuous, acceleration jumps; 2: acceleration continuous,
+    jerk jumps; 3: jerk continuous).
+    """
+
+    C_v: float
+    C_a: float
+    C_j: float
+    continuity: int
+
+    @property
+    def first_jump(self) -> str:
+        return DERIVATIVE_NAMES[self.continuity + 1]
+
+
+class MotionLaw:
+    """One classic motion law with fixed parameters.
+
+    Call it on anything CasADi accepts (float, numpy array, SX, MX) to get
+    ``y(x)``; :meth:`derivatives` gives ``y, y', y'', y''', y''''`` numerically.
+    """
+
+    def __init__(self, name: str, **params: float):
+        spec = _LAWS[name]
+        self.name = name
+        self.title = spec.title
+        self.params = dict(params)
+        self._spec = spec
+        x = ca.SX.sym("x")
+        y = spec.shape(x, **params)
+        ders = [y]
+        for _ in range(4):
+            ders.append(ca.jacobian(ders[-1], x))
+        self._y = ca.Function(f"law_{name}", [x], [y])
+        self._ders = ca.Function(f"law_{name}_ders", [x], ders)
+
+    def __repr__(self) -> str:
+        p = ", ".join(f"{k}={v:g}" for k, v in self.params.items())
+        return f"MotionLaw({self.name!r}{', ' + p if p else ''})"
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, MotionLaw) and (self.name, self.params) == (other.name, other.params)
+
+    def __hash__(self) -> int:
+        return hash((self.name, tuple(sorted(self.params.items()))))
+
+    @property
+    def label(self) -> str:
+        p = ", ".join(f"{k} = {v:g}" for k, v in self.params.items())
+        return f"{self.name} ({p})" if p else self.name
+
+    @property
+    def breaks(self) -> tuple[float, ...]:
+        """Interior points where the law's pieces join (where a derivative may jump)."""
+        return tuple(self._spec.breaks(**self.params))
+
+    def __call__(self, x):
+        """y(x): numeric for numbers/arrays, symbolic for CasADi expressions."""
+        if isinstance(x, (ca.SX, ca.MX)):
+            return self._y(x)
+        (out,) = evaluate(self._y, x)
+        return float(out) if out.ndim == 0 else out
+
+    def derivatives(self, x, order: int = 3) -> tuple[np.ndarray, ...]:
+        """Numeric ``(y, y', ..., y^(order))`` at the points ``x`` (order <= 4)."""
+        return tuple(evaluate(self._ders, np.atleast_1d(np.asarray(x, dtype=float)))[: order + 1])
+
+    def symbolic_derivatives(self, x, order: int = 3):
+        """``(y, y', ..., y^(order))`` as CasADi expressions of the symbol ``x``."""
+        return tuple(self._ders(x)[: order + 1])
+
+    @property
+    def characteristics(self) -> Characteristics:
+        return _characteristics(self)
+
+
+@cache
+def _characteristics(law: MotionLaw) -> Characteristics:
+    x = np.linspace(0.0, 1.0, 200_001)
+    _, y1, y2, y3, _ = law.derivatives(x, order=4)
+    c_v, c_a, c_j = (float(np.max(np.abs(d))) for d in (y1, y2, y3))
+    continuity = _continuity(law)
+    if continuity < 2:
+        c_j = math.inf
+    return Characteristics(C_v=c_v, C_a=c_a, C_j=c_j, continuity=continuity)
+
+
+def _continuity(law: MotionLaw, delta: float = 1e-9) -> int:
+    """Highest derivative order continuous over dwell - move - dwell."""
+    scale = [1.0] + [float(np.max(np.abs(d))) + 1.0 for d in law.derivatives(np.linspace(0, 1, 2001), 4)[1:]]
+    # (left value, right value) pairs at the joints: dwell/move at 0 and 1, and the law's breaks
+    _, *start = law.derivatives([0.0], 4)
+    _, *end = law.derivatives([1.0], 4)
+    left_b = law.derivatives([b - delta for b in law.breaks] or [0.5], 4)
+    right_b = law.derivatives([b + delta for b in law.breaks] or [0.5], 4)
+    for k in range(1, 5):
+        jumps = [abs(float(start[k - 1][0])), abs(float(end[k - 1][0]))]
+        if law.breaks:
+            jumps.append(float(np.max(np.abs(left_b[k] - right_b[k]))))
+        if max(jumps) > 1e-6 * scale[k]:
+            return k - 1
+    return 4
+
+
+def make_law(name: str, *, where: tuple[str, str] = ("<law>", "law"), **params: float) -> MotionLaw:
+    """Validated constructor: ``make_law("modified_sine", chi=0.095)``.
+
+    ``where`` is ``(file, field)`` for the error message.
+    """
+    file, fld = where
+    if name not in _LAWS:
+        raise ProblemError(file, fld, f"unknown motion law {name!r}; choose one of {', '.join(LAW_NAMES)}")
+    spec = _LAWS[name]
+    unknown = set(params) - set(spec.params)
+    if unknown:
+        extra = ", ".join(sorted(unknown))
+        allowed = ", ".join(spec.params) or "none"
+        raise ProblemError(file, fld, f"law {name!r} takes no parameter {extra} (parameters: {allowed})")
+    full = {}
+    for pname, (default, lo, hi, lo_open) in spec.params.items():
+        value = params.get(pname, default)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ProblemError(file, pname, f"must be a number, got {value!r}")
+        if (value <= lo if lo_open else value < lo) or value > hi:
+            raise ProblemError(file, pname, f"{value!r} is out of range {'(' if lo_open else '['}{lo:g}, {hi:g}] for law {name!r}")
+        full[pname] = float(value)
+    return _cached_law(name, tuple(sorted(full.items())))
+
+
+@cache
+def _cached_law(name: str, params: tuple) -> MotionLaw:
+    return MotionLaw(name, **dict(params))
+
+
+def law_table() -> list[dict]:
+    """The classic laws with their characteristic values (default parameters)."""
+    rows = []
+    for name in LAW_NAMES:
+        law = make_law(name)
+        c = law.characteristics
+        rows.append(
+            {
+                "law": name,
+                "title": law.title,
+                "params": law.params,
+                "C_v": c.C_v,
+                "C_a": c.C_a,
+                "C_j": None if math.isinf(c.C_j) else c.C_j,
+                "continuity": f"C{c.continuity}",
+                "first_jump": c.first_jump,
+            }
+        )
+    return rows
