@@ -1,0 +1,29 @@
+"""strokeopt: design servo-driven reciprocating mechanisms ("electronic cams").
+
+The data flow::
+
+    problem file (TOML)
+        -> Problem            validated, typed, SI units           problem.py
+        -> TimingDiagram      dwells and moves on the cam circle   timing.py
+        -> StrokeFunction     s, v, a, jerk as CasADi Functions:   laws.py, stroke.py
+                              a classic law or a collocation
+                              solution
+        -> Report             tables, JSON, plots                  report.py, plots.py
+
+``cli.py`` ties these together; notebooks and tests use the same public API
+exported here.
+"""
+
+from .errors import ProblemError, SolverError, StrokeoptError
+from .laws import LAW_NAMES, Characteristics, MotionLaw, law_table, make_law
+from .problem import Problem, load_problem
+from .stroke import Kinematics, Piece, StrokeFunction
+from .timing import Interval, TimingDiagram
+from .transmission import BeltPulley, Transmission, gt3_pitch_diameter
+
+__all__ = [
+    "LAW_NAMES", "BeltPulley", "Characteristics", "Interval", "Kinematics", "MotionLaw", "Piece", "Problem",
+    "ProblemError", "SolverError", "StrokeFunction", "StrokeoptError", "TimingDiagram", "Transmission",
+    "gt3_pitch_diameter", "law_table", "load_problem", "make_law",
+]
+__version__ = "0.1.0"
