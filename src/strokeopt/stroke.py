@@ -161,7 +161,7 @@ class StrokeFunction:
             t = ca.SX.sym("t")
             tm = ca.fmod(ca.fmod(t, self.period) + self.period, self.period)
             outs = [ca.SX(0)] * 4
-            for p in reversed(self.pieces):
+            for p in self.pieces:  # a later piece overrides from its start on
                 vals = p.symbolic(tm - p.t_start)
                 outs = [ca.if_else(tm >= p.t_start, val, o) for val, o in zip(vals, outs)]
             self._fn = ca.Function("stroke", [t], outs, ["t"], ["s", "v", "a", "jerk"])
@@ -187,7 +187,8 @@ class StrokeFunction:
             jump_before = abs(ends[k][0] - ends[(k - 1) % n][1]) > 1e-6 * a_scale
             jump_after = abs(ends[k][1] - ends[(k + 1) % n][0]) > 1e-6 * a_scale
             v_max, a_max, j_max = peaks[k]
-            if p.unbounded_jerk_inside or jump_before or jump_after:
+            # a jump at a joint is an impulse of the piece that moves there (not of a dwell beside it)
+            if p.unbounded_jerk_inside or ((jump_before or jump_after) and a_max > 0):
                 j_max = math.inf
             result.append(PiecePeaks(v_max, a_max, j_max))
         return result

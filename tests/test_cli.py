@@ -1,0 +1,49 @@
+"""The kinematics and laws commands, as a user and a script see them."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from strokeopt.cli import main
+
+
+def test_kinematics_json(capsys, reference_path, tmp_path):
+    fig = tmp_path / "k.png"
+    assert main(["kinematics", str(reference_path), "--json", "--plot", str(fig)]) == 0
+    out, err = capsys.readouterr()
+    data = json.loads(out)  # stdout is only JSON
+    assert data["spm"] == 500 and data["law"] == "modified_sine"
+    assert [m["index"] for m in data["moves"]] == [1, 2, 3]
+    assert [m["stroke_mm"] for m in data["moves"]] == pytest.approx([32, 35, 3])
+    for key in ("v_max_m_s", "a_max_m_s2", "jerk_max_m_s3", "pulley_speed_max_deg_s", "pulley_accel_max_deg_s2"):
+        assert all(m[key] > 0 for m in data["moves"]), key
+    assert fig.stat().st_size > 10_000 and str(fig) in err
+
+
+def test_kinematics_table_and_options(capsys, reference_path, tmp_path):
+    assert main(["kinematics", str(reference_path), "--spm", "600", "--law", "modified_sine", "--chi", "0.125",
+                 "--plot", "none"]) == 0
+    out = capsys.readouterr().out
+    assert "600 spm" in out and "chi = 0.125" in out and "move 3" in out
+
+
+def test_unbounded_jerk_is_null_in_json(capsys, reference_path):
+    assert main(["kinematics", str(reference_path), "--law", "parabolic", "--json", "--plot", "none"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert all(m["jerk_max_m_s3"] is None for m in data["moves"])
+
+
+def test_laws_json(capsys):
+    assert main(["laws", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)["laws"]
+    assert [r["law"] for r in rows] == ["parabolic", "cubic", "cosine", "modified_sine", "sine", "poly5", "poly7"]
+
+
+def test_help_teaches(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["kinematics", "--help"])
+    assert exc.value.code == 0
+    out = capsys.readouterr().out
+    assert "--set" in out and "Example" in out

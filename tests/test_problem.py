@@ -1,0 +1,106 @@
+"""Problem files: validation, overrides, and the CLI's one-line errors (exit 2, no traceback)."""
+
+from __future__ import annotations
+
+import pytest
+
+from strokeopt import ProblemError, load_problem
+from strokeopt.cli import main
+
+
+def _run_error(capsys, argv):
+    code = main(argv)
+    out, err = capsys.readouterr()
+    assert code == 2
+    assert "Traceback" not in err and "Traceback" not in out
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1, err
+    return lines[0]
+
+
+MOVE_2 = """[[timing.intervals]]
+name = "move 2"
+span_deg = 46.5
+stroke_mm = 35.0
+direction = "up"
+published_time_s = 0.0312
+"""
+
+
+@pytest.mark.parametrize(
+    "edit, field, words",
+    [
+        # a missing interval: the spans no longer add to 360 deg
+        (lambda t: t.replace(MOVE_2, ""), "timing.intervals", "not 360"),
+        (lambda t: t.replace("span_deg = 169.6", "span_deg = 170.6"), "timing.intervals", "add to 361"),
+        (lambda t: t.replace("stroke_mm = 3.0", "stroke_mm = -3.0"), "timing.intervals[5].stroke_mm", "at least 0"),
+        (lambda t: t.replace('law = "modified_sine"', 'law = "trapezoidal"'), "motion.law", "not one of"),
+        (lambda t: t.replace("chi = 0.095", "chi = 0.4"), "chi", "out of range"),
+        (lambda t: t.replace('direction = "up"', 'direction = "sideways"', 1), "timing.intervals[4].direction", "not one of"),
+        (lambda t: t.replace("spm = 500", "spm = -5"), "machine.spm", "positive"),
+        (lambda t: t.replace("pulley_teeth = 28", "pulley_teeth = 28.5"), "transmission.pulley_teeth", "whole number"),
+        (lambda t: t.replace("[machine]", "[machine]\nspeed_rpm = 3"), "machine.speed_rpm", "unknown field"),
+        (lambda t: t.replace('direction = "down"\nhandover = true', 'direction = "up"\nhandover = true'),
+         "timing.intervals", "do not close the cycle"),
+    ],
+)
+def test_bad_problem_files(capsys, write_problem, edit, field, words):
+    path = write_problem(edit)
+    line = _run_error(capsys, ["kinematics", str(path), "--plot", "none"])
+    assert line.startswith(f"strokeopt: error: {path}: ")
+    assert f": {field}" in line and words in line, line
+
+
+def test_not_toml(capsys, tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text("this is [not toml\n")
+    line = _run_error(capsys, ["kinematics", str(path)])
+    assert str(path) in line and "not valid TOML" in line
+
+
+def test_missing_file(capsys, tmp_path):
+    line = _run_error(capsys, ["kinematics", str(tmp_path / "nope.toml")])
+    assert "no such file" in line
+
+
+def test_set_unknown_key(capsys, reference_path):
+    line = _run_error(capsys, ["kinematics", str(reference_path), "--set", "motion.chix=0.1", "--plot", "none"])
+    assert "motion.chix" in line and "unknown field" in line and "did you mean 'chi'" in line and "--set" in line
+
+
+def test_set_unknown_section(capsys, reference_path):
+    line = _run_error(capsys, ["kinematics", str(reference_path), "--set", "motoin.chi=0.1", "--plot", "none"])
+    assert "motoin" in line and "no such field" in line
+
+
+def test_set_bad_value_is_validated(capsys, reference_path):
+    line = _run_error(capsys, ["kinematics", str(reference_path), "--set", "motion.chi=0", "--plot", "none"])
+    assert "chi" in line and "out of range" in line
+
+
+def test_spm_zero(capsys, reference_path):
+    line = _run_error(capsys, ["kinematics", str(reference_path), "--spm", "0", "--plot", "none"])
+    assert "--spm" in line and "positive" in line
+
+
+def test_unknown_law_on_command_line(capsys, reference_path):
+    line = _run_error(capsys, ["kinematics", str(reference_path), "--law", "bogus", "--plot", "none"])
+    assert "--law" in line and "bogus" in line
+
+
+def test_set_overrides_apply(reference_path):
+    p = load_problem(reference_path, ["motion.chi=0.125", "timing.intervals[2].law=poly5", "machine.spm=600"])
+    assert p.spm == 600
+    assert p.timing.intervals[1].law.name == "poly5"
+    assert p.timing.intervals[3].law.params == {"chi": 0.125}
+
+
+def test_set_index_out_of_range(reference_path):
+    with pytest.raises(ProblemError, match=r"timing.intervals\[9\].*no element 9"):
+        load_problem(reference_path, ["timing.intervals[9].law=poly5"])
+
+
+def test_law_on_a_dwell_is_an_error(write_problem):
+    path = write_problem(lambda t: t.replace("span_deg = 169.6", 'span_deg = 169.6\nlaw = "poly5"'))
+    with pytest.raises(ProblemError, match=r"timing.intervals\[3\].law: a dwell"):
+        load_problem(path)
