@@ -107,6 +107,8 @@ _LAWS: dict[str, _LawSpec] = {
 
 #: Names of the classic laws, in the order the thesis compares them.
 LAW_NAMES = tuple(_LAWS)
+#: Every parameter name any law takes (``chi``), for readers of problem files.
+LAW_PARAMETERS = tuple(sorted({p for spec in _LAWS.values() for p in spec.params}))
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from .errors import ProblemError
-from .laws import LAW_NAMES, MotionLaw, make_law
+from .laws import LAW_NAMES, LAW_PARAMETERS, MotionLaw, make_law
 from .timing import INTERVAL_TIMES, Interval, TimingDiagram
 from .transmission import BeltPulley, gt3_pitch_diameter
 
@@ -283,7 +283,7 @@ def _read_law(f: Fields, key: str, default: MotionLaw | None = None) -> MotionLa
     """A law name plus its parameters, read from the same table (``law = "modified_sine"``, ``chi = 0.095``)."""
     name = f.string(key, None if default is not None else _REQUIRED, choices=LAW_NAMES)
     params = {}
-    for pname in ("chi",):
+    for pname in LAW_PARAMETERS:
         if f.has(pname):
             params[pname] = f.number(pname)
     if name is None:
@@ -316,7 +316,7 @@ def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagra
             signed = stroke if direction == "up" else -stroke
             move_index = n_moves
         else:
-            for key in ("direction", "law", "chi"):
+            for key in ("direction", "law", *LAW_PARAMETERS):
                 if row.has(key):
                     raise row.error(key, "a dwell (stroke_mm = 0) has no " + key)
             if handover:
