@@ -22,6 +22,8 @@ from typing import Any
 
 from .errors import ProblemError
 from .laws import LAW_NAMES, LAW_PARAMETERS, MotionLaw, make_law
+from .model import Model, parse_model
+from .scene import Scene, parse_scenes
 from .timing import INTERVAL_TIMES, Interval, TimingDiagram
 from .transmission import BeltPulley, gt3_pitch_diameter
 
@@ -203,6 +205,8 @@ class Problem:
     pulley_teeth: int
     transmission: BeltPulley
     data: dict = field(repr=False)  # the raw data after overrides, for reporting
+    model: Model | None = field(default=None, repr=False)  # [model]: the contact model (model.py)
+    scenes: dict[str, Scene] | None = field(default=None, repr=False)  # [scenes.*] (scene.py)
 
     @property
     def period(self) -> float:
@@ -265,6 +269,8 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
     teeth = trans.number("pulley_teeth", integer=True, min=1)
     trans.finish()
 
+    model = parse_model(top.table("model", required=False))
+    scenes = parse_scenes(top.table("scenes", required=False), model)
     top.finish()
     return Problem(
         file=path or Path(file),
@@ -276,6 +282,8 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
         pulley_teeth=teeth,
         transmission=BeltPulley(gt3_pitch_diameter(teeth)),
         data=data,
+        model=model,
+        scenes=scenes,
     )
 
 

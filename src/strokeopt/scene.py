@@ -1,0 +1,204 @@
+"""Scenes: the part of a model one question needs, built into a CasADi ODE.
+
+A scene names the bodies and elements it needs (``[scenes.release]`` in the
+problem file: the shell, the control member and the cage, their springs, the
+pad and the pin/cage contacts). :meth:`Scene.build` writes the equations of
+motion of exactly those: a body not named has no state, an element not named
+is not built, not integrated and not reported. The driven body is not a state
+either: it follows the stroke, ``x_driven(t) = sign * (s(t) - s_ref)``.
+
+States are scaled so that tolerances mean something next to 1e9 N/m contacts:
+positions in mm (an absolute tolerance of 1e-6 is 1 nm, 1 N on such a contact),
+velocities in m/s. Time is normalised per stroke piece (``sigma`` in [0, 1],
+``t = t_start + sigma * duration``) so that one integrator object restarts at
+every joint of the stroke (where its derivatives may jump) with the piece
+index and duration as parameters.
+
+Switching: ``smoothing = 0`` uses hard ``if_else`` switches (the source's
+``L = 1 while c >= 0``); ``smoothing = eps > 0`` (m) replaces the compression
+by ``eps * softplus(c / eps)`` and the switch by ``sigmoid(c / eps)``, which
+adds ``k * eps * ln 2`` of force at zero compression (see simulate.py for
+what each costs).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import casadi as ca
+
+from .model import FRAME, Element, Model
+
+if TYPE_CHECKING:
+    from .problem import Fields
+    from .stroke import StrokeFunction
+
+
+@dataclass(frozen=True)
+class Scene:
+    """The bodies and elements of a model that one simulation needs."""
+
+    name: str
+    model: Model = field(repr=False)
+    bodies: tuple[str, ...]
+    elements: tuple[str, ...]
+    description: str = ""
+
+    @property
+    def driven(self) -> str:
+        return self.model.driven
+
+    @property
+    def free_bodies(self) -> tuple[str, ...]:
+        """The bodies that have states, in state order."""
+        return tuple(b for b in self.bodies if b != self.driven)
+
+    @property
+    def state_size(self) -> int:
+        return 2 * len(self.free_bodies)
+
+    @property
+    def element_objects(self) -> tuple[Element, ...]:
+        els = self.model.elements
+        return tuple(els[e] for e in self.elements)
+
+    def build(self, stroke: "StrokeFunction", sign: float, s_ref: float, smoothing: float = 0.0) -> "SceneODE":
+        """The scene's ODE with the driven body following ``stroke``: ``x = sign * (s - s_ref)``."""
+        return SceneODE(self, stroke, float(sign), float(s_ref), float(smoothing))
+
+
+def make_scene(model: Model, name: str, bodies, elements, description: str = "", where=None) -> Scene:
+    """A scene from names, checked against the model. ``where = (file, field)`` for error messages."""
+    from .errors import ProblemError
+
+    file, fld = where or ("scene", name)
+    bodies = tuple(bodies)
+    elements = tuple(elements)
+    for b in bodies:
+        if b not in model.bodies:
+            raise ProblemError(file, f"{fld}.bodies", f"unknown body {b!r}; the model has: {', '.join(model.bodies)}")
+    if len(set(bodies)) != len(bodies):
+        raise ProblemError(file, f"{fld}.bodies", "names a body twice")
+    if model.driven not in bodies:
+        raise ProblemError(file, f"{fld}.bodies", f"must include the driven body {model.driven!r} (nothing moves without it)")
+    known = model.elements
+    for e in elements:
+        if e not in known:
+            raise ProblemError(file, f"{fld}.elements", f"unknown element {e!r}; the model has: {', '.join(known)}")
+        missing = sorted(known[e].body_names - set(bodies))
+        if missing:
+            raise ProblemError(file, f"{fld}.elements", f"element {e!r} needs bod{'ies' if len(missing) > 1 else 'y'} "
+                                                        f"{', '.join(map(repr, missing))}, which the scene does not name")
+    if len(set(elements)) != len(elements):
+        raise ProblemError(file, f"{fld}.elements", "names an element twice")
+    return Scene(name, model, bodies, elements, description)
+
+
+def parse_scenes(f: "Fields | None", model: Model | None) -> dict[str, Scene] | None:
+    """Read ``[scenes.<name>]`` tables (bodies, elements, description). None if absent."""
+    if f is None:
+        return None
+    if model is None:
+        raise f.error("", "scenes need a [model] section to take their bodies and elements from")
+    scenes = {}
+    for name in list(f.data):
+        sf = f.table(name)
+        description = sf.string("description", "")
+        bodies = sf.raw("bodies")
+        elements = sf.raw("elements", [])
+        for key, value in (("bodies", bodies), ("elements", elements)):
+            if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+                raise sf.error(key, f"must be an array of names, got {value!r}")
+        sf.finish()
+        scenes[name] = make_scene(model, name, bodies, elements, description, where=(sf.file, sf.path))
+    f.finish()
+    if not scenes:
+        raise f.error("", "defines no scene")
+    return scenes
+
+
+def _softplus(z):
+    return ca.fmax(z, 0) + ca.log(1 + ca.exp(-ca.fabs(z)))
+
+
+def _sigmoid(z):
+    return 0.5 * (1 + ca.tanh(0.5 * z))
+
+
+class SceneODE:
+    """The CasADi equations of one scene driven by one stroke.
+
+    * ``dae``: ``{"x", "p", "t", "ode"}`` for ``casadi.integrator`` in normalised piece time
+      ``sigma``, ``p = [piece index, piece start time, piece duration]``;
+    * ``outputs``: Function ``(sigma, x, p) -> [t, x_d, v_d, a_d, accelerations, element forces, drive force]``
+      (SI) to evaluate along a trajectory.
+    """
+
+    def __init__(self, scene: Scene, stroke: "StrokeFunction", sign: float, s_ref: float, smoothing: float):
+        self.scene = scene
+        self.smoothing = smoothing
+        free = scene.free_bodies
+        n = len(free)
+        sigma = ca.SX.sym("sigma")
+        z = ca.SX.sym("z", 2 * n)
+        p = ca.SX.sym("p", 3)
+        k, t0, dur = p[0], p[1], p[2]
+        tau = sigma * dur
+        s_list, v_list, a_list = [], [], []
+        for piece in stroke.pieces:
+            s, v, a, _ = piece.symbolic(tau)
+            s_list.append(s)
+            v_list.append(v)
+            a_list.append(a)
+        if len(stroke.pieces) == 1:
+            s, v, a = s_list[0], v_list[0], a_list[0]
+        else:
+            s = ca.conditional(k, s_list, s_list[-1])
+            v = ca.conditional(k, v_list, v_list[-1])
+            a = ca.conditional(k, a_list, a_list[-1])
+        xd, vd, ad = sign * (s - s_ref), sign * v, sign * a
+
+        pos = {scene.driven: xd, FRAME: ca.SX(0)}
+        vel = {scene.driven: vd, FRAME: ca.SX(0)}
+        for i, b in enumerate(free):
+            pos[b] = z[i] * 1e-3
+            vel[b] = z[n + i]
+        force_on = {b: ca.SX(0) for b in scene.bodies}
+        force_on[FRAME] = ca.SX(0)
+        forces = []
+        eps = smoothing
+        for el in scene.element_objects:
+            a_, b_ = el.bodies
+            if el.kind == "grip":
+                c = pos[a_] - pos[b_]
+                cond = pos[el.acts_while[0]] - pos[el.acts_while[1]] + el.acts_while[2]
+                active = el.elastic_force(c) + el.damping * (vel[a_] - vel[b_])
+                if eps > 0:
+                    f = _sigmoid(cond / eps) * active
+                else:
+                    f = ca.if_else(cond >= 0, active, 0)
+            else:
+                c = pos[a_] - pos[b_] + el.offset
+                cd = vel[a_] - vel[b_]
+                if eps > 0:
+                    f = el.elastic_force(eps * _softplus(c / eps)) + _sigmoid(c / eps) * el.damping * cd
+                else:
+                    f = ca.if_else(c >= 0, el.elastic_force(c) + el.damping * cd, 0)
+            forces.append(f)
+            force_on[a_] -= f
+            force_on[b_] += f
+        masses = scene.model.bodies
+        acc = ca.vertcat(*[force_on[b] / masses[b].mass for b in free]) if n else ca.SX(0, 1)
+        drive = masses[scene.driven].mass * ad - force_on[scene.driven]
+        ode = ca.vertcat(dur * 1e3 * z[n:], dur * acc)
+        self.dae = {"x": z, "p": p, "t": sigma, "ode": ode}
+        self.outputs = ca.Function(
+            "scene_outputs", [sigma, z, p],
+            [t0 + tau, xd, vd, ad, acc, ca.vertcat(*forces) if forces else ca.SX(0, 1), drive],
+            ["sigma", "z", "p"], ["t", "x_d", "v_d", "a_d", "acc", "forces", "drive"])
+        self.rhs = ca.Function("scene_rhs", [sigma, z, p], [ode], ["sigma", "z", "p"], ["ode"])
+
+    @property
+    def state_size(self) -> int:
+        return int(self.dae["x"].numel())
