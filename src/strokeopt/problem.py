@@ -20,6 +20,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from .drive import DriveSpec, parse_drive
 from .errors import ProblemError
 from .laws import LAW_NAMES, LAW_PARAMETERS, MotionLaw, make_law
 from .model import Model, parse_model
@@ -207,6 +208,7 @@ class Problem:
     data: dict = field(repr=False)  # the raw data after overrides, for reporting
     model: Model | None = field(default=None, repr=False)  # [model]: the contact model (model.py)
     scenes: dict[str, Scene] | None = field(default=None, repr=False)  # [scenes.*] (scene.py)
+    drive: DriveSpec | None = field(default=None, repr=False)  # [drive]: motor, load, limits (drive.py)
 
     @property
     def period(self) -> float:
@@ -271,6 +273,8 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
 
     model = parse_model(top.table("model", required=False))
     scenes = parse_scenes(top.table("scenes", required=False), model)
+    drive_table = top.table("drive", required=False)
+    drive = parse_drive(drive_table, (path or Path(file)).parent) if drive_table is not None else None
     top.finish()
     return Problem(
         file=path or Path(file),
@@ -284,6 +288,7 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
         data=data,
         model=model,
         scenes=scenes,
+        drive=drive,
     )
 
 

@@ -18,12 +18,22 @@ from ._casadi import evaluate
 
 
 class Transmission:
-    """Base: subclasses define :meth:`position` (CasADi-friendly)."""
+    """Base: subclasses define :meth:`position` (CasADi-friendly) and, to be driven
+    from a prescribed load motion, :meth:`inverse_position`.
+
+    ``inertia`` [kg m^2] is the moment of inertia the transmission adds on the
+    motor shaft (a pulley, a screw); the drive adds it to the rotor's.
+    """
 
     name = "transmission"
+    inertia = 0.0
 
     def position(self, phi):
         raise NotImplementedError
+
+    def inverse_position(self, x):
+        """Motor angle [rad] for the load position ``x`` [m], with CasADi operations."""
+        raise NotImplementedError(f"{type(self).__name__} has no inverse")
 
     def _functions(self):
         if not hasattr(self, "_fns"):
@@ -34,6 +44,12 @@ class Transmission:
             self._fns = ca.Function(f"{self.name}_transfer", [phi], [x, mu, nu], ["phi"], ["x", "mu", "nu"])
         return self._fns
 
+    def _inverse_function(self):
+        if not hasattr(self, "_inv"):
+            x = ca.SX.sym("x")
+            self._inv = ca.Function(f"{self.name}_inverse", [x], [self.inverse_position(x)], ["x"], ["phi"])
+        return self._inv
+
     def transfer(self, phi):
         """Numeric ``(x, mu, nu)`` at motor angles ``phi`` [rad]."""
         return tuple(evaluate(self._functions(), phi))
@@ -43,13 +59,20 @@ class Transmission:
 
     def motor_angle(self, x):
         """Motor angle [rad] for the load position ``x`` [m] (inverse of :meth:`position`)."""
-        raise NotImplementedError(f"{type(self).__name__} has no inverse")
+        (phi,) = evaluate(self._inverse_function(), x)
+        return phi
 
     def motor_kinematics(self, x, v, a):
         """Motor angle, speed and acceleration [rad, rad/s, rad/s^2] for a load motion.
 
-        From ``v = mu*omega`` and ``a = mu*eps + nu*omega^2``.
+        From ``v = mu*omega`` and ``a = mu*eps + nu*omega^2``. Numeric
+        (numpy) for numeric input, CasADi expressions for CasADi symbols.
         """
+        if isinstance(x, (ca.SX, ca.MX)) or isinstance(v, (ca.SX, ca.MX)) or isinstance(a, (ca.SX, ca.MX)):
+            phi = self._inverse_function()(x)
+            _, mu, nu = self.symbolic_transfer(phi)
+            omega = v / mu
+            return phi, omega, (a - nu * omega**2) / mu
         phi = self.motor_angle(np.asarray(x, dtype=float))
         _, mu, nu = self.transfer(phi)
         omega = np.asarray(v) / mu
@@ -58,14 +81,17 @@ class Transmission:
 
 
 class BeltPulley(Transmission):
-    """A toothed belt on a pulley of pitch radius ``r``: ``x = r*phi``."""
+    """A toothed belt on a pulley of pitch radius ``r``: ``x = r*phi``; ``inertia`` of the pulley [kg m^2]."""
 
     name = "belt_pulley"
 
-    def __init__(self, pitch_diameter: float):
+    def __init__(self, pitch_diameter: float, inertia: float = 0.0):
         if not (pitch_diameter > 0 and math.isfinite(pitch_diameter)):
             raise ValueError("pitch diameter must be positive")
+        if not (inertia >= 0 and math.isfinite(inertia)):
+            raise ValueError("pulley inertia must be zero or positive")
         self.pitch_diameter = float(pitch_diameter)
+        self.inertia = float(inertia)
 
     @property
     def radius(self) -> float:
@@ -74,11 +100,69 @@ class BeltPulley(Transmission):
     def position(self, phi):
         return self.radius * phi
 
+    def inverse_position(self, x):
+        return x / self.radius
+
+    # constant ratio: the same numbers as the AD transfer functions, without a CasADi call per sample
+    def transfer(self, phi):
+        phi = np.asarray(phi, dtype=float)
+        return self.radius * phi, np.full_like(phi, self.radius), np.zeros_like(phi)
+
     def motor_angle(self, x):
         return np.asarray(x) / self.radius
 
     def __repr__(self) -> str:
         return f"BeltPulley(pitch_diameter={self.pitch_diameter * 1e3:.3f} mm)"
+
+
+class SliderCrank(Transmission):
+    """A crank of radius ``r`` and connecting rod ``l`` driving a slider.
+
+    ``x`` is the slider's travel from the dead centre (phi = 0), towards the
+    crank shaft: ``x = r + l - r cos(phi) - sqrt(l^2 - r^2 sin^2(phi))``.
+    The inverse uses the half turn 0 <= phi <= pi.
+    """
+
+    name = "slider_crank"
+
+    def __init__(self, crank_radius: float, rod_length: float, inertia: float = 0.0):
+        if not (crank_radius > 0 and rod_length > crank_radius):
+            raise ValueError("need 0 < crank radius < rod length")
+        self.r, self.l, self.inertia = float(crank_radius), float(rod_length), float(inertia)
+
+    def position(self, phi):
+        return self.r + self.l - self.r * ca.cos(phi) - ca.sqrt(self.l**2 - (self.r * ca.sin(phi)) ** 2)
+
+    def inverse_position(self, x):
+        d = self.r + self.l - x
+        return ca.acos((d**2 + self.r**2 - self.l**2) / (2 * d * self.r))
+
+
+class ScrewLever(Transmission):
+    """Screw and lever of the knitting-machine stitch-cam drive (digest B).
+
+    The motor turns a screw of lead ``s``; the nut moves ``x2 = s/(2 pi) phi``
+    and tilts a lever, ``phi4 = atan(x2/R0)``; the lever's other arm, at
+    ``offset`` [rad] to the first, moves the sleeve ``x6 = R0P tan(phi4 + offset)``
+    (minus its value at phi = 0, so x6(0) = 0).
+    """
+
+    name = "screw_lever"
+
+    def __init__(self, lead: float, R0: float, R0P: float, offset: float = 0.0, inertia: float = 0.0):
+        if not (lead > 0 and R0 > 0 and R0P > 0):
+            raise ValueError("lead and lever arms must be positive")
+        self.lead, self.R0, self.R0P, self.offset, self.inertia = (float(lead), float(R0), float(R0P),
+                                                                   float(offset), float(inertia))
+
+    def position(self, phi):
+        x2 = self.lead / (2 * math.pi) * phi
+        phi4 = ca.atan(x2 / self.R0)
+        return self.R0P * (ca.tan(phi4 + self.offset) - math.tan(self.offset))
+
+    def inverse_position(self, x):
+        phi4 = ca.atan(x / self.R0P + math.tan(self.offset)) - self.offset
+        return 2 * math.pi / self.lead * self.R0 * ca.tan(phi4)
 
 
 def gt3_pitch_diameter(teeth: int) -> float:

@@ -1,0 +1,350 @@
+"""Actuators and drive components: servo motors, toothed pulleys, belts, and their catalogues.
+
+Catalogues are TOML files. strokeopt ships three (package data in
+``strokeopt/catalogue/``): ``motors.toml`` (thesis Tab. 4.5-4.6),
+``gt3_pulleys.toml`` (GT3 pulleys, 14-52 grooves) and ``gt3_belts.toml``
+(GT3 belts and the belt-check method of thesis appendix 2). A user adds
+parts with files of the same form (``load_catalogue(extra_files=[...])`` or
+``drive.catalogues`` in a problem file); a file may hold any of the tables::
+
+    [[motor]]            name, model, maker, source, rated_speed_rpm, rated_torque_N_m,
+                         stall_torque_N_m, peak_torque_N_m, rotor_inertia_kg_cm2
+    [[pulley]]           name, profile, teeth, inertia_kg_cm2 (optional, else the model)
+    [inertia_model.<profile>]   kind = "power_law", source
+    [[belt]]             name, profile, width_mm, width_factor,
+                         breaking_tension_glass_N, breaking_tension_steel_N
+    [belt_method.<profile>]     source, reference_width_mm, grooves, allowable_tension_N,
+                                peak_tension_factor, breaking_safety
+
+Names are unique across all loaded files; a duplicate is an error naming
+both files. Units are converted to SI when read.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from .errors import ProblemError
+from .problem import Fields, _did_you_mean
+from .transmission import BeltPulley
+
+RPM = 2 * math.pi / 60  # rad/s per rpm
+KG_CM2 = 1e-4  # kg m^2 per kg cm^2
+BUILTIN_FILES = ("motors.toml", "gt3_pulleys.toml", "gt3_belts.toml")
+BELT_CORDS = ("glass", "steel")
+
+
+# --------------------------------------------------------------------------- parts
+
+
+@dataclass(frozen=True)
+class ServoMotor:
+    """A servo motor, SI units: speeds in rad/s, torques in N m, inertia in kg m^2.
+
+    The torque-speed envelope is the simple catalogue one: continuous torque
+    falls linearly from the stall torque at standstill to the rated torque at
+    the rated speed; the peak torque is available up to the rated speed.
+    """
+
+    name: str
+    rated_speed: float
+    rated_torque: float
+    stall_torque: float
+    peak_torque: float
+    rotor_inertia: float
+    model: str = ""
+    maker: str = ""
+    source: str = ""
+
+    @property
+    def rated_speed_rpm(self) -> float:
+        return self.rated_speed / RPM
+
+    def continuous_torque(self, speed):
+        """Continuous (thermal) torque [N m] at ``speed`` [rad/s]; zero beyond the rated speed."""
+        w = np.abs(np.asarray(speed, dtype=float))
+        line = self.stall_torque + (self.rated_torque - self.stall_torque) * w / self.rated_speed
+        return np.where(w <= self.rated_speed, line, 0.0)
+
+    def peak_envelope(self, speed):
+        """Peak torque [N m] available at ``speed`` [rad/s]; zero beyond the rated speed."""
+        w = np.abs(np.asarray(speed, dtype=float))
+        return np.where(w <= self.rated_speed, self.peak_torque, 0.0)
+
+
+@dataclass(frozen=True)
+class PulleyInertiaModel:
+    """Moment of inertia of a pulley from its pitch diameter: ``J = J_ref * (PD / PD_ref)**p``.
+
+    Fitted by least squares in log-log to published (pitch diameter, inertia)
+    pairs; works on floats, numpy arrays and CasADi symbols (``**`` only).
+    """
+
+    profile: str
+    reference_diameter: float
+    reference_inertia: float
+    exponent: float
+    source: str = ""
+
+    @classmethod
+    def fit(cls, profile: str, diameters, inertias, source: str = "") -> "PulleyInertiaModel":
+        d = np.asarray(diameters, dtype=float)
+        j = np.asarray(inertias, dtype=float)
+        slope, intercept = np.polyfit(np.log(d), np.log(j), 1)
+        d_ref = float(np.exp(np.mean(np.log(d))))
+        return cls(profile, d_ref, float(np.exp(intercept + slope * np.log(d_ref))), float(slope), source)
+
+    def __call__(self, pitch_diameter):
+        return self.reference_inertia * (pitch_diameter / self.reference_diameter) ** self.exponent
+
+
+@dataclass(frozen=True)
+class Pulley:
+    """A toothed pulley: ``teeth`` grooves, pitch diameter [m], moment of inertia [kg m^2].
+
+    ``inertia_source`` says where the inertia came from: ``"data"`` (the
+    catalogue file) or ``"model"`` (the profile's fitted inertia model).
+    """
+
+    name: str
+    profile: str
+    teeth: int
+    pitch_diameter: float
+    inertia: float
+    inertia_source: str = "data"
+
+    @property
+    def radius(self) -> float:
+        return self.pitch_diameter / 2
+
+    def transmission(self) -> BeltPulley:
+        """The belt transmission of this pulley, carrying its inertia."""
+        return BeltPulley(self.pitch_diameter, inertia=self.inertia)
+
+
+@dataclass(frozen=True)
+class Belt:
+    """A toothed belt: width [m], width factor of the catalogue, minimum breaking tension [N] by cord."""
+
+    name: str
+    profile: str
+    width: float
+    width_factor: float
+    breaking_tension: dict = field(default_factory=dict)  # cord -> N
+
+
+@dataclass(frozen=True)
+class BeltMethod:
+    """The catalogue's belt-load method for one profile (thesis appendix 2)."""
+
+    profile: str
+    reference_width: float
+    grooves: tuple[int, ...]
+    allowable_tension: tuple[float, ...]  # N per reference width
+    peak_tension_factor: float
+    breaking_safety: float
+    source: str = ""
+
+    def allowable_tension_for(self, grooves: int) -> float:
+        """Allowable working tension per reference width for a pulley of ``grooves``.
+
+        A groove count between two rows takes the row below it (conservative);
+        below the first row there is no rating and the result is 0.
+        """
+        k = int(np.searchsorted(np.asarray(self.grooves), grooves, side="right")) - 1
+        return float(self.allowable_tension[k]) if k >= 0 else 0.0
+
+
+def pitch_diameter(profile: str, teeth) -> float:
+    """Pitch diameter [m] of a pulley: ``z * pitch / pi`` (GT3: 3 mm pitch, thesis 4.2)."""
+    return teeth * PROFILE_PITCH[profile] / math.pi
+
+
+PROFILE_PITCH = {"GT3": 3e-3}
+
+
+# --------------------------------------------------------------------------- catalogue
+
+
+@dataclass
+class Catalogue:
+    """Every part loaded from the catalogue files, by name."""
+
+    motors: dict[str, ServoMotor] = field(default_factory=dict)
+    pulleys: dict[str, Pulley] = field(default_factory=dict)
+    belts: dict[str, Belt] = field(default_factory=dict)
+    inertia_models: dict[str, PulleyInertiaModel] = field(default_factory=dict)
+    belt_methods: dict[str, BeltMethod] = field(default_factory=dict)
+    files: list[str] = field(default_factory=list)
+
+    def motor(self, name: str, where: tuple[str, str] = ("--motor", "")) -> ServoMotor:
+        """The motor called ``name``; an unknown name is a :class:`ProblemError` at ``where``."""
+        if name not in self.motors:
+            raise ProblemError(where[0], where[1], f"unknown motor {name!r}{_did_you_mean(name, self.motors)}; "
+                                                   f"the catalogue has {', '.join(self.motors)}")
+        return self.motors[name]
+
+    def belt(self, name: str, where: tuple[str, str] = ("--belt", "")) -> Belt:
+        if name not in self.belts:
+            raise ProblemError(where[0], where[1], f"unknown belt {name!r}{_did_you_mean(name, self.belts)}; "
+                                                   f"the catalogue has {', '.join(self.belts)}")
+        return self.belts[name]
+
+    def pulleys_of(self, profile: str, teeth_min: int = 1, teeth_max: int = 10**6) -> list[Pulley]:
+        """Pulleys of a profile within a groove range, smallest first."""
+        out = [p for p in self.pulleys.values() if p.profile == profile and teeth_min <= p.teeth <= teeth_max]
+        return sorted(out, key=lambda p: p.teeth)
+
+    def pulley_inertia(self, profile: str, pitch_diameter_m):
+        """Inertia [kg m^2] of a pulley of any pitch diameter from the profile's model (continuous sizing)."""
+        if profile not in self.inertia_models:
+            raise ProblemError("catalogue", f"inertia_model.{profile}", "no pulley inertia model for this profile")
+        return self.inertia_models[profile](pitch_diameter_m)
+
+
+def builtin_catalogue_files() -> list[Path]:
+    base = resources.files("strokeopt") / "catalogue"
+    return [Path(str(base / name)) for name in BUILTIN_FILES]
+
+
+def load_catalogue(extra_files=(), builtin: bool = True) -> Catalogue:
+    """Read the shipped catalogue files (unless ``builtin=False``) and then ``extra_files``.
+
+    Every field is validated; a duplicate name (within a file or across
+    files), a missing field or an unknown key raises :class:`ProblemError`
+    naming the file and the field.
+    """
+    files = (builtin_catalogue_files() if builtin else []) + [Path(f) for f in extra_files]
+    cat = Catalogue()
+    origin: dict[tuple[str, str], str] = {}
+    pending: list[tuple[Fields, str, str, int]] = []  # pulleys without inertia: resolved after all models are fitted
+    for path in files:
+        file = str(path)
+        try:
+            data = tomllib.loads(path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise ProblemError(file, "", "catalogue file not found") from None
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ProblemError(file, "", f"cannot be read: {exc}") from None
+        except tomllib.TOMLDecodeError as exc:
+            raise ProblemError(file, "", f"is not valid TOML: {exc}") from None
+        cat.files.append(file)
+        top = Fields(data, file)
+
+        def unique(kind: str, row: Fields) -> str:
+            name = row.string("name")
+            if not name.strip():
+                raise row.error("name", "must not be empty")
+            if (kind, name) in origin:
+                raise row.error("name", f"duplicate {kind} name {name!r} (already defined in {origin[(kind, name)]})")
+            origin[(kind, name)] = file
+            return name
+
+        for row in top.tables("motor", required=False):
+            name = unique("motor", row)
+            motor = ServoMotor(
+                name=name,
+                model=row.string("model", name),
+                maker=row.string("maker", ""),
+                source=row.string("source", ""),
+                rated_speed=row.number("rated_speed_rpm", positive=True) * RPM,
+                rated_torque=row.number("rated_torque_N_m", positive=True),
+                stall_torque=row.number("stall_torque_N_m", positive=True),
+                peak_torque=row.number("peak_torque_N_m", positive=True),
+                rotor_inertia=row.number("rotor_inertia_kg_cm2", positive=True) * KG_CM2,
+            )
+            if motor.peak_torque < motor.rated_torque:
+                raise row.error("peak_torque_N_m", f"{motor.peak_torque:g} is below the rated torque {motor.rated_torque:g}")
+            row.finish()
+            cat.motors[name] = motor
+
+        models = top.table("inertia_model", required=False)
+        if models is not None:
+            for profile in list(models.data):
+                m = models.table(profile)
+                if profile not in PROFILE_PITCH:
+                    raise m.error("", f"unknown pulley profile {profile!r}; known: {', '.join(PROFILE_PITCH)}")
+                m.string("kind", "power_law", choices=("power_law",))
+                src = m.string("source", "")
+                m.finish()
+                cat.inertia_models[profile] = PulleyInertiaModel(profile, 0.0, 0.0, 0.0, src)  # fitted below
+            models.finish()
+
+        for row in top.tables("pulley", required=False):
+            name = unique("pulley", row)
+            profile = row.string("profile", choices=tuple(PROFILE_PITCH))
+            teeth = row.number("teeth", integer=True, min=1)
+            pd = pitch_diameter(profile, teeth)
+            if row.has("inertia_kg_cm2"):
+                inertia = row.number("inertia_kg_cm2", positive=True) * KG_CM2
+                cat.pulleys[name] = Pulley(name, profile, teeth, pd, inertia, "data")
+            else:
+                pending.append((row, name, profile, teeth))
+            row.finish()
+
+        methods = top.table("belt_method", required=False)
+        if methods is not None:
+            for profile in list(methods.data):
+                m = methods.table(profile)
+                if profile not in PROFILE_PITCH:
+                    raise m.error("", f"unknown belt profile {profile!r}; known: {', '.join(PROFILE_PITCH)}")
+                grooves = _number_list(m, "grooves", integer=True)
+                tension = _number_list(m, "allowable_tension_N")
+                if len(grooves) != len(tension):
+                    raise m.error("allowable_tension_N", f"has {len(tension)} values for {len(grooves)} groove counts")
+                if any(b <= a for a, b in zip(grooves, grooves[1:])):
+                    raise m.error("grooves", "must increase")
+                cat.belt_methods[profile] = BeltMethod(
+                    profile, m.number("reference_width_mm", positive=True) * 1e-3, tuple(int(g) for g in grooves),
+                    tuple(tension), m.number("peak_tension_factor", positive=True),
+                    m.number("breaking_safety", positive=True), m.string("source", ""))
+                m.finish()
+            methods.finish()
+
+        for row in top.tables("belt", required=False):
+            name = unique("belt", row)
+            profile = row.string("profile", choices=tuple(PROFILE_PITCH))
+            cat.belts[name] = Belt(
+                name, profile, row.number("width_mm", positive=True) * 1e-3, row.number("width_factor", positive=True),
+                {cord: row.number(f"breaking_tension_{cord}_N", positive=True) for cord in BELT_CORDS
+                 if row.has(f"breaking_tension_{cord}_N")})
+            if not cat.belts[name].breaking_tension:
+                raise row.error("breaking_tension_glass_N", "a belt needs at least one breaking tension "
+                                                            "(breaking_tension_glass_N or breaking_tension_steel_N)")
+            row.finish()
+        top.finish()
+
+    for profile, model in list(cat.inertia_models.items()):
+        known = [p for p in cat.pulleys.values() if p.profile == profile and p.inertia_source == "data"]
+        if len(known) < 2:
+            raise ProblemError(cat.files[-1], f"inertia_model.{profile}",
+                               f"needs at least two {profile} pulleys with inertia_kg_cm2 to fit, found {len(known)}")
+        cat.inertia_models[profile] = PulleyInertiaModel.fit(
+            profile, [p.pitch_diameter for p in known], [p.inertia for p in known], model.source)
+    for row, name, profile, teeth in pending:
+        if profile not in cat.inertia_models:
+            raise row.error("inertia_kg_cm2", f"is missing and there is no inertia model for profile {profile!r} "
+                                              "to compute it: give the pulley's moment of inertia")
+        pd = pitch_diameter(profile, teeth)
+        cat.pulleys[name] = Pulley(name, profile, teeth, pd, float(cat.inertia_models[profile](pd)), "model")
+    return cat
+
+
+def _number_list(f: Fields, key: str, integer: bool = False) -> list[float]:
+    value = f.raw(key)
+    if not isinstance(value, list) or not value:
+        raise f.error(key, "must be a non-empty array of numbers")
+    out = []
+    for i, v in enumerate(value, 1):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+            raise f.error(key, f"element {i} must be a positive number, got {v!r}")
+        if integer and int(v) != v:
+            raise f.error(key, f"element {i} must be a whole number, got {v!r}")
+        out.append(float(v))
+    return out
