@@ -20,6 +20,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from .design import DesignSettings, parse_design
 from .drive import DriveSpec, parse_drive
 from .errors import ProblemError
 from .laws import LAW_NAMES, LAW_PARAMETERS, MotionLaw, make_law
@@ -209,6 +210,7 @@ class Problem:
     model: Model | None = field(default=None, repr=False)  # [model]: the contact model (model.py)
     scenes: dict[str, Scene] | None = field(default=None, repr=False)  # [scenes.*] (scene.py)
     drive: DriveSpec | None = field(default=None, repr=False)  # [drive]: motor, load, limits (drive.py)
+    design: DesignSettings | None = field(default=None, repr=False)  # [design]: optimal stroke (design.py)
 
     @property
     def period(self) -> float:
@@ -275,6 +277,8 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
     scenes = parse_scenes(top.table("scenes", required=False), model)
     drive_table = top.table("drive", required=False)
     drive = parse_drive(drive_table, (path or Path(file)).parent) if drive_table is not None else None
+    design_table = top.table("design", required=False)
+    design = parse_design(design_table) if design_table is not None else None
     top.finish()
     return Problem(
         file=path or Path(file),
@@ -289,6 +293,7 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
         model=model,
         scenes=scenes,
         drive=drive,
+        design=design,
     )
 
 
