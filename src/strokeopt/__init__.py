@@ -8,22 +8,28 @@ The data flow::
         -> StrokeFunction     s, v, a, jerk as CasADi Functions:   laws.py, stroke.py
                               a classic law or a collocation
                               solution
+        -> Drive              transmission + motor + load: torque, transmission.py,
+                              speed, checks; catalogue sizing      actuators.py, drive.py
         -> Report             tables, JSON, plots                  report.py, plots.py
 
 ``cli.py`` ties these together; notebooks and tests use the same public API
 exported here.
 """
 
+from .actuators import Belt, Catalogue, Pulley, ServoMotor, load_catalogue
+from .drive import Check, DriveLimits, DriveSpec, Load, LoadForce, drive_checks, load_torque, size_drive
 from .errors import ProblemError, SolverError, StrokeoptError
 from .laws import LAW_NAMES, Characteristics, MotionLaw, law_table, make_law
 from .problem import Problem, load_problem
 from .stroke import Kinematics, Piece, StrokeFunction
 from .timing import Interval, TimingDiagram
-from .transmission import BeltPulley, Transmission, gt3_pitch_diameter
+from .transmission import BeltPulley, ScrewLever, SliderCrank, Transmission, gt3_pitch_diameter
 
 __all__ = [
     "LAW_NAMES", "BeltPulley", "Characteristics", "Interval", "Kinematics", "MotionLaw", "Piece", "Problem",
     "ProblemError", "SolverError", "StrokeFunction", "StrokeoptError", "TimingDiagram", "Transmission",
     "gt3_pitch_diameter", "law_table", "load_problem", "make_law",
+    "Belt", "Catalogue", "Check", "DriveLimits", "DriveSpec", "Load", "LoadForce", "Pulley", "ScrewLever", "ServoMotor",
+    "SliderCrank", "drive_checks", "load_catalogue", "load_torque", "size_drive",
 ]
 __version__ = "0.1.0"

@@ -111,6 +111,92 @@ def cmd_kinematics(args) -> int:
     return 0
 
 
+def cmd_size(args) -> int:
+    from .drive import optimal_radius, size_drive
+    from .report import format_table, to_json
+
+    problem = _load(args)
+    if problem.drive is None:
+        raise ProblemError(args.problem, "drive", "the problem has no [drive] section (motor, moving_mass_kg, ...)")
+    catalogue = problem.drive.catalogue(args.catalogue)
+    progress = None
+    if args.max_spm and not args.json:
+        from tqdm import tqdm
+
+        progress = lambda it: tqdm(it, desc="max spm", unit="pair", file=sys.stderr, leave=False)  # noqa: E731
+    sizing = size_drive(problem, catalogue=catalogue, motors=args.motor, teeth=args.pulley_teeth,
+                        find_max_spm=args.max_spm, progress=progress)
+    report = sizing.to_dict(explain=args.explain)
+    if args.continuous_radius:
+        spec = problem.drive
+        model = lambda d: catalogue.pulley_inertia(spec.profile, d)  # noqa: E731
+        motors = {c.motor.name: c.motor for c in sizing.candidates}
+        report["continuous_radius"] = []
+        for m in motors.values():
+            opt = optimal_radius(m, spec.load, sizing.kinematics, model)
+            report["continuous_radius"].append({
+                "motor": m.name, "pitch_radius_mm": opt.radius * 1e3, "pitch_diameter_mm": 2e3 * opt.radius,
+                "teeth_equivalent": opt.teeth_equivalent, "peak_torque_N_m": opt.peak_torque,
+                "pulley_inertia_kg_cm2": opt.pulley_inertia * 1e4})
+    if args.json:
+        print(to_json(report))
+    else:
+        inp = report["inputs"]
+        forces = "; ".join(f"{f['name']} ({f['kind']}, {f['force_N']:g} N + {f['stiffness_N_m']:g} N/m "
+                           f"beyond {f['contact_position_mm']:g} mm, pushing {f['direction']})"
+                           for f in inp["load_forces"]) or "none"
+        print(f"{report['problem']} at {report['spm']:g} spm (cycle {report['cycle_time_s'] * 1e3:.1f} ms, "
+              f"{inp['law']}, {inp['samples']} samples over the whole cycle)")
+        print(f"load: moving mass {inp['moving_mass_kg']:g} kg, gravity {inp['gravity_m_s2']:g} m/s^2 along the "
+              f"axis, load forces: {forces}")
+        print(f"limits: drive peak {inp['peak_limit_pct']:g} % of rated torque, inertia ratio <= "
+              f"{inp['max_inertia_ratio']:g}; belt {inp['belt']} ({inp['belt_cord']} cord, service factor "
+              f"{inp['belt_service_factor']})")
+        print("ranked: feasible first, then by overload (peak / rated torque); 'binding' = the check with the "
+              "least margin\n")
+        cols = [("motor", "motor"), ("pulley_teeth", "z"), ("pulley_pitch_diameter_mm", "PD mm"),
+                ("peak_torque_N_m", "peak N m"), ("rms_torque_N_m", "RMS N m"), ("overload_pct", "overload %"),
+                ("peak_speed_rpm", "speed rpm"), ("inertia_ratio", "J ratio"), ("feasible", "feasible"),
+                ("binding", "binding"), ("margin", "margin")]
+        if args.max_spm:
+            cols += [("max_spm", "max spm"), ("max_spm_binding", "limited by")]
+        print(format_table(report["candidates"], cols))
+        if args.max_spm:
+            print(f"\nmax spm: bisection per pair to {sizing.max_spm_resolution:g} spm (rounded down); "
+                  "'limited by' is the check that fails just above it")
+        if args.explain:
+            rows = []
+            for c in sizing.candidates:
+                rows.append({"motor": c.motor.name, "z": c.pulley.teeth, "angle": c.peak_angle_deg,
+                             **{k: v for k, v in c.peak_terms.items()}})
+            keys = [k for k in rows[0] if k not in ("motor", "z", "angle")]
+            print("\nmotor torque at the instant of the peak, by term [N m] (they add up to the total):")
+            print(format_table(rows, [("motor", "motor"), ("z", "z"), ("angle", "cam deg")] + [(k, k) for k in keys]))
+            best = sizing.candidates[0]
+            print(f"\nchecks of {best.motor.name} with z{best.pulley.teeth}:")
+            print(format_table([c.as_dict() for c in best.checks], [("name", "check"), ("value", "value"),
+                               ("limit", "limit"), ("unit", "unit"), ("margin", "margin"), ("ok", "ok")]))
+        if args.continuous_radius:
+            print("\ncontinuous pulley radius minimising the peak torque (pulley inertia from the catalogue's model):")
+            print(format_table(report["continuous_radius"], [
+                ("motor", "motor"), ("pitch_radius_mm", "radius mm"), ("pitch_diameter_mm", "PD mm"),
+                ("teeth_equivalent", "teeth (not rounded)"), ("peak_torque_N_m", "peak N m")]))
+    _write_figure(lambda p: sizing.plot(p), _plot_path(args, "sizing"), args)
+    return 0
+
+
+def cmd_bench(args) -> int:
+    from .bench import format_results, run_benchmarks
+    from .report import to_json
+
+    results = run_benchmarks(args.only)
+    if args.json:
+        print(to_json({"benchmarks": [r.as_dict() for r in results]}))
+    else:
+        print(format_results(results))
+    return 0
+
+
 # --------------------------------------------------------------------------- parser
 
 
@@ -141,6 +227,38 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--chi", type=float, help="shape parameter chi of the modified sine law (0 < chi <= 0.25)")
     p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_kinematics.png; 'none' for no figure)")
     p.set_defaults(run=cmd_kinematics)
+
+    p = sub.add_parser("size", parents=[problem], help="rank motors and pulleys: torque, RMS, speed, inertia, belt checks",
+                       description="Drive sizing: every catalogue motor with every allowed pulley, over the whole "
+                                   "cycle of the problem's stroke: peak torque against the motor's peak and the "
+                                   "drive's peak limit (overload = peak / rated), RMS torque against the rated "
+                                   "torque, peak speed against the rated speed, load/rotor inertia ratio, belt width "
+                                   "and breaking checks (thesis appendix 2). The load is the [drive] section of the "
+                                   "problem: moving mass, gravity, load forces.",
+                       epilog="Example: strokeopt size problems/deco2000_needle_bar.toml --spm 600 --max-spm "
+                              "--motor 055U2B30 --explain")
+    p.add_argument("--spm", help="stitches per minute (default: machine.spm of the file)")
+    p.add_argument("--law", help="use this motion law for every move (see 'strokeopt laws')")
+    p.add_argument("--chi", type=float, help="shape parameter chi of the modified sine law")
+    p.add_argument("--motor", action="append", metavar="NAME", help="only this catalogue motor (repeatable)")
+    p.add_argument("--pulley-teeth", type=int, action="append", metavar="Z", help="only this pulley (repeatable)")
+    p.add_argument("--catalogue", action="append", default=[], metavar="FILE",
+                   help="an extra catalogue file (motors, pulleys, belts; repeatable)")
+    p.add_argument("--max-spm", action="store_true",
+                   help="also find each pair's highest stitch rate with every check passing (bisection, 1 spm)")
+    p.add_argument("--continuous-radius", action="store_true",
+                   help="also the pulley radius minimising each motor's peak torque (not rounded to teeth)")
+    p.add_argument("--explain", action="store_true", help="torque breakdown at the peak and every check's margin")
+    p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_sizing.png; 'none' for no figure)")
+    p.set_defaults(run=cmd_size)
+
+    p = sub.add_parser("bench", help="speed benchmarks, each against a reference measured in the same run",
+                       description="Run the registered benchmarks (strokeopt/bench.py): each times a capability "
+                                   "and a reference implementation side by side and prints the ratio and its target.",
+                       epilog="Example: strokeopt bench --only size_catalogue")
+    p.add_argument("--only", action="append", metavar="NAME", help="run only this benchmark (repeatable)")
+    p.add_argument("--json", action="store_true", help="print only JSON on stdout")
+    p.set_defaults(run=cmd_bench)
     return parser
 
 

@@ -386,3 +386,311 @@ def parse_drive(f, base_dir: Path | None = None) -> DriveSpec:
     f.finish()
     return DriveSpec(motor, Load(mass, gravity, tuple(forces)), limits, profile, tmin, tmax, belt, cord, service,
                      allowable, tuple(resolved), f.file)
+
+
+# --------------------------------------------------------------------------- sizing over a catalogue
+
+
+@dataclass
+class Candidate:
+    """One motor with one pulley, checked over the cycle at ``spm``."""
+
+    motor: object  # actuators.ServoMotor
+    pulley: object  # actuators.Pulley
+    spm: float
+    checks: list[Check]
+    peak_terms: dict  # torque terms [N m] at the instant of the peak torque
+    peak_angle_deg: float
+    max_spm: float | None = None
+    max_spm_binding: str | None = None
+
+    def check(self, name: str) -> Check:
+        return next(c for c in self.checks if c.name == name)
+
+    @property
+    def feasible(self) -> bool:
+        return all(c.ok for c in self.checks)
+
+    @property
+    def binding(self) -> str:
+        """The check with the smallest margin (violated first, or closest to its limit)."""
+        return binding_check(self.checks).name
+
+    def row(self, explain: bool = False, with_max_spm: bool = False) -> dict:
+        out = {
+            "motor": self.motor.name,
+            "pulley_teeth": self.pulley.teeth,
+            "pulley_pitch_diameter_mm": self.pulley.pitch_diameter * 1e3,
+            "peak_torque_N_m": self.check("peak_torque").value,
+            "rms_torque_N_m": self.check("rms_torque").value,
+            "overload_pct": self.check("overload").value,
+            "peak_speed_rpm": self.check("peak_speed").value,
+            "inertia_ratio": self.check("inertia_ratio").value,
+            "feasible": self.feasible,
+            "binding": self.binding,
+            "margin": binding_check(self.checks).margin,
+        }
+        if with_max_spm:
+            out["max_spm"] = self.max_spm
+            out["max_spm_binding"] = self.max_spm_binding
+        if explain:
+            out["checks"] = [c.as_dict() for c in self.checks]
+            out["peak_angle_deg"] = self.peak_angle_deg
+            out["torque_at_peak_N_m"] = dict(self.peak_terms)
+        return out
+
+
+@dataclass
+class Sizing:
+    """The result of :func:`size_drive`: candidates ranked, and what they were computed from."""
+
+    problem_name: str
+    spm: float
+    period: float
+    candidates: list[Candidate]
+    inputs: dict
+    kinematics: object  # stroke.Kinematics of the whole cycle
+    load: Load
+    limits: DriveLimits
+    max_spm_resolution: float | None = None
+
+    def to_dict(self, explain: bool = False) -> dict:
+        with_max = self.max_spm_resolution is not None
+        out = {"problem": self.problem_name, "spm": self.spm, "cycle_time_s": self.period, "inputs": self.inputs,
+               "candidates": [c.row(explain, with_max) for c in self.candidates]}
+        if with_max:
+            out["max_spm_resolution"] = self.max_spm_resolution
+        return out
+
+    def torque_curve(self, candidate: Candidate) -> TorqueTerms:
+        k = self.kinematics
+        return load_torque(candidate.motor, candidate.pulley.transmission(), self.load, k.s, k.v, k.a)
+
+    def plot(self, path=None, candidate: Candidate | None = None):
+        """The classic sizing picture for ``candidate`` (default: the best ranked):
+        the cycle's torque-speed trajectory over the motor's continuous and peak
+        envelopes and the drive's peak limit, and the torque terms over the cam angle."""
+        import matplotlib.pyplot as plt
+
+        c = candidate or self.candidates[0]
+        terms = self.torque_curve(c)
+        rpm = 60 / (2 * math.pi)
+        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.8), constrained_layout=True)
+        m = c.motor
+        w = np.linspace(0, m.rated_speed, 50)
+        for sign in (1, -1):
+            ax1.plot(sign * w * rpm, sign * m.continuous_torque(w), color="tab:green",
+                     label="continuous (thermal)" if sign > 0 else None)
+            ax1.plot(sign * w * rpm, sign * m.peak_envelope(w), color="tab:red", label="motor peak" if sign > 0 else None)
+            drive_peak = min(m.peak_torque, self.limits.peak_limit_pct / 100 * m.rated_torque)
+            ax1.plot(sign * w * rpm, sign * np.full_like(w, drive_peak), color="tab:red", ls=":",
+                     label=f"drive limit ({self.limits.peak_limit_pct:g} % rated)" if sign > 0 else None)
+        ax1.plot(terms.omega * rpm, terms.total, color="tab:blue", lw=1.2, label="cycle")
+        rms = c.check("rms_torque").value
+        ax1.axhline(rms, color="tab:blue", ls="--", lw=0.8, label=f"RMS {rms:.2f} N m")
+        ax1.set_xlabel("motor speed [rpm]")
+        ax1.set_ylabel("motor torque [N m]")
+        ax1.set_title(f"{m.name}, pulley z{c.pulley.teeth}, {self.spm:g} spm")
+        ax1.grid(True, alpha=0.3)
+        ax1.legend(fontsize=8, loc="best")
+        angle = 360.0 * self.kinematics.t / self.period
+        ax2.plot(angle, terms.total, color="k", lw=1.5, label="total")
+        for name, val in terms.as_dict().items():
+            val = np.broadcast_to(val, angle.shape)
+            if np.max(np.abs(val)) > 1e-9:
+                ax2.plot(angle, val, lw=0.9, label=name)
+        ax2.set_xlabel("cam angle [deg]")
+        ax2.set_ylabel("motor torque [N m]")
+        ax2.set_xlim(0, 360)
+        ax2.set_xticks(np.arange(0, 361, 45))
+        ax2.grid(True, alpha=0.3)
+        ax2.legend(fontsize=8, loc="best")
+        ax2.set_title(f"torque over the cycle (binding: {c.binding})")
+        if path is not None:
+            fig.savefig(path, dpi=110)
+            plt.close(fig)
+        return fig
+
+
+def scale_kinematics(kin, factor: float):
+    """The same stroke run ``factor`` times faster: time / f, speed * f, acceleration * f^2, jerk * f^3.
+
+    Exact for a timing diagram, whose interval times all scale with the cycle time.
+    """
+    from .stroke import Kinematics
+
+    return Kinematics(kin.t / factor, kin.s, kin.v * factor, kin.a * factor**2, kin.j * factor**3)
+
+
+def _candidates(kin, motors, pulleys, load: Load, limits: DriveLimits, belt: BeltSpec | None, spm: float,
+                period: float) -> list[Candidate]:
+    """Every motor with every pulley, vectorised: one torque evaluation per pulley over the
+    whole cycle; the rotor term broadcast over the motors."""
+    rotor = np.array([m.rotor_inertia for m in motors])[:, None]
+    out = []
+    for p in pulleys:
+        tr = p.transmission()
+        base = load_torque(0.0, tr, load, kin.s, kin.v, kin.a)  # everything but the rotor
+        total = base.total[None, :] + rotor * base.eps[None, :]
+        peak, rms, peak_speed, peak_force = _cycle_values(total, base.omega, base.load_force, kin.t)
+        reflected = reflected_inertia(tr, load, base.phi)
+        i_peak = np.argmax(np.abs(total), axis=-1)
+        for k, m in enumerate(motors):
+            i = int(i_peak[k])
+            terms = {name: float(np.broadcast_to(val, kin.s.shape)[i]) for name, val in base.as_dict().items()}
+            terms["rotor_inertia"] = float(rotor[k, 0] * base.eps[i])
+            terms["total"] = float(total[k, i])
+            checks = _checks(peak[k], rms[k], peak_speed, peak_force, m, reflected, limits, belt, p.teeth)
+            out.append(Candidate(m, p, spm, checks, terms, float(360.0 * kin.t[i] / period)))
+    return out
+
+
+def rank(candidates: list[Candidate]) -> list[Candidate]:
+    """Feasible pairs first; then by the thesis's criterion, the theoretical overload
+    (peak load torque / rated torque, thesis 4.6), lowest first; ties by inertia ratio."""
+    return sorted(candidates, key=lambda c: (not c.feasible, c.check("overload").value, c.check("inertia_ratio").value))
+
+
+def max_spm(kin, spm: float, motor, pulley, load: Load, limits: DriveLimits, belt: BeltSpec | None = None,
+            resolution: float = 1.0, highest: float = 20_000.0) -> tuple[float | None, str]:
+    """Highest stitch rate [spm] at which every check of ``motor`` with ``pulley`` passes.
+
+    ``kin`` is the cycle sampled at ``spm``; other speeds scale it exactly
+    (:func:`scale_kinematics`). Bisection to ``resolution`` spm; returns the
+    highest feasible rate found (rounded down to the resolution, ``None`` if
+    even ``resolution`` spm fails, ``highest`` if nothing binds below it) and
+    the check that fails just above it.
+    """
+    period = kin.t[-1] - kin.t[0]
+
+    def checks_at(x):
+        k = scale_kinematics(kin, x / spm)
+        return _candidates(k, [motor], [pulley], load, limits, belt, x, period * spm / x)[0].checks
+
+    def ok(x):
+        return all(c.ok for c in checks_at(x))
+
+    lo, hi = 0.0, spm
+    if ok(spm):
+        lo = spm
+        while ok(hi := min(hi * 2, highest)):
+            lo = hi
+            if hi >= highest:
+                return highest, binding_check(checks_at(highest)).name
+    while hi - lo > resolution:
+        mid = 0.5 * (lo + hi)
+        if ok(mid):
+            lo = mid
+        else:
+            hi = mid
+    if lo < resolution:
+        return None, binding_check(checks_at(resolution)).name
+    failing = [c for c in checks_at(hi) if not c.ok]
+    return math.floor(lo / resolution) * resolution, min(failing or checks_at(hi), key=lambda c: c.margin).name
+
+
+def size_drive(problem, spm: float | None = None, *, catalogue=None, motors=None, teeth=None, samples: int = 3601,
+               find_max_spm: bool = False, resolution: float = 1.0, progress=None) -> Sizing:
+    """Rank every catalogue motor with every allowed pulley for the stroke of ``problem`` at ``spm``.
+
+    ``motors``: names to keep (default all); ``teeth``: groove counts to keep
+    (default the problem's ``pulley_teeth_min..max``). ``find_max_spm`` adds
+    the highest feasible stitch rate of each pair (bisection to ``resolution``).
+    ``progress``: a callable wrapping an iterable (tqdm) for the max-spm search.
+    """
+    spec = problem.drive
+    if spec is None:
+        raise ProblemError(str(problem.file), "drive", "the problem has no [drive] section (motor, moving mass, ...)")
+    spm = problem.spm if spm is None else spm
+    cat = catalogue if catalogue is not None else spec.catalogue()
+    chosen = [cat.motor(n) for n in motors] if motors else list(cat.motors.values())
+    if teeth:
+        pulleys = []
+        for z in teeth:
+            found = [p for p in cat.pulleys_of(spec.profile) if p.teeth == z]
+            if not found:
+                have = ", ".join(str(p.teeth) for p in cat.pulleys_of(spec.profile))
+                raise ProblemError("--pulley-teeth", "", f"no {spec.profile} pulley with {z} teeth in the catalogue "
+                                                         f"(have {have})")
+            pulleys += found
+    else:
+        pulleys = cat.pulleys_of(spec.profile, spec.teeth_min, spec.teeth_max)
+        if not pulleys:
+            raise ProblemError(spec.file, "drive.pulley_teeth_min", f"no {spec.profile} pulley in the catalogue between "
+                                                                   f"{spec.teeth_min} and {spec.teeth_max} teeth")
+    belt = spec.belt_spec(cat)
+    stroke = problem.stroke(spm)
+    kin = stroke.sample(samples)
+    cands = _candidates(kin, chosen, pulleys, spec.load, spec.limits, belt, spm, stroke.period)
+    if find_max_spm:
+        it = progress(cands) if progress is not None else cands
+        for c in it:
+            c.max_spm, c.max_spm_binding = max_spm(kin, spm, c.motor, c.pulley, spec.load, spec.limits, belt, resolution)
+    inputs = {
+        "moving_mass_kg": spec.load.moving_mass,
+        "gravity_m_s2": spec.load.gravity,
+        "load_forces": [{"name": f.name, "kind": f.kind, "direction": "up" if f.direction > 0 else "down",
+                         "force_N": f.force, "stiffness_N_m": f.stiffness,
+                         "contact_position_mm": f.contact_position * 1e3} for f in spec.load.forces],
+        "peak_limit_pct": spec.limits.peak_limit_pct,
+        "max_inertia_ratio": spec.limits.max_inertia_ratio,
+        "belt": belt.belt.name if belt else None,
+        "belt_cord": belt.cord if belt else None,
+        "belt_service_factor": belt.service_factor if belt else None,
+        "law": stroke.label,
+        "samples": samples,
+        "catalogue_files": cat.files,
+    }
+    return Sizing(problem.name, spm, stroke.period, rank(cands), inputs, kin, spec.load, spec.limits,
+                  resolution if find_max_spm else None)
+
+
+# --------------------------------------------------------------------------- continuous pulley radius
+
+
+@dataclass(frozen=True)
+class RadiusOptimum:
+    """The belt-pulley radius that minimises a motor's peak torque over the cycle."""
+
+    motor: str
+    radius: float  # m
+    peak_torque: float  # N m
+    pulley_inertia: float  # kg m^2 at that radius
+    teeth_equivalent: float  # pitch diameter / (pitch / pi), not rounded
+
+
+def optimal_radius(motor, load: Load, kin, pulley_inertia=None, bounds=(2e-3, 0.2), pitch: float = 3e-3,
+                   solver_options: dict | None = None) -> RadiusOptimum:
+    """Pulley pitch radius minimising the peak motor torque of a belt drive over the sampled cycle.
+
+    For a belt, ``T_k(r) = (J_rotor + J_pulley(r)) a_k / r + r F_k`` with the load
+    force ``F_k`` of each sample, so the problem is ``min z`` subject to
+    ``-z <= T_k(r) <= z``, solved by IPOPT through CasADi. ``pulley_inertia``:
+    a function of the pitch diameter (CasADi-friendly; the catalogue's model),
+    or None for none. With inertia only and no pulley inertia the optimum is
+    ``r = sqrt(J_rotor / m)`` (inertia matching).
+    """
+    from .errors import SolverError
+    from .transmission import BeltPulley
+
+    base = load_torque(0.0, BeltPulley(2.0), load, kin.s, kin.v, kin.a)  # r = 1: eps = a, mu = 1
+    acc = np.asarray(base.eps, dtype=float)
+    force = np.asarray(base.load_force, dtype=float)
+    r = ca.MX.sym("r")
+    z = ca.MX.sym("z")
+    jp = pulley_inertia(2 * r) if pulley_inertia is not None else 0.0
+    torque = (_rotor_inertia(motor) + jp) * ca.DM(acc) / r + r * ca.DM(force)
+    nlp = {"x": ca.vertcat(r, z), "f": z, "g": ca.vertcat(torque - z, torque + z)}
+    opts = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "ipopt.tol": 1e-10}
+    opts.update(solver_options or {})
+    solver = ca.nlpsol("radius", "ipopt", nlp, opts)
+    r0 = float(np.clip(math.sqrt(_rotor_inertia(motor) / load.moving_mass), *bounds))
+    n = len(acc)
+    res = solver(x0=[r0, 1.0], lbx=[bounds[0], 0.0], ubx=[bounds[1], ca.inf],
+                 lbg=np.r_[np.full(n, -np.inf), np.zeros(n)], ubg=np.r_[np.zeros(n), np.full(n, np.inf)])
+    if not solver.stats()["success"]:
+        raise SolverError(f"pulley radius optimisation for {getattr(motor, 'name', 'motor')} failed: "
+                          f"{solver.stats()['return_status']}")
+    r_opt, z_opt = (float(x) for x in np.asarray(res["x"]).ravel())
+    jp_opt = float(pulley_inertia(2 * r_opt)) if pulley_inertia is not None else 0.0
+    return RadiusOptimum(getattr(motor, "name", ""), r_opt, z_opt, jp_opt, 2 * r_opt * math.pi / pitch)
