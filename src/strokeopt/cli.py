@@ -197,6 +197,112 @@ def cmd_bench(args) -> int:
     return 0
 
 
+def _sim_options(args):
+    from .simulate import SimulationOptions
+
+    return SimulationOptions(method=args.method, rtol=args.rtol, atol=args.atol, smoothing=args.smoothing_mm * 1e-3)
+
+
+def _scene_name(args, problem) -> str:
+    from .errors import ProblemError
+
+    if not problem.scenes:
+        raise ProblemError(str(problem.file), "scenes", "the problem defines no [scenes.*] (and [model]) to simulate")
+    name = args.scene or ("release" if "release" in problem.scenes else next(iter(problem.scenes)))
+    if name not in problem.scenes:
+        raise ProblemError(str(problem.file), "--scene", f"no scene {name!r}; the problem has: {', '.join(problem.scenes)}")
+    return name
+
+
+def _report_scene(args, problem, scene, result, extra=None) -> None:
+    from .report import to_json
+    from .simulate import scene_text
+
+    summary = {**(extra or {}), **result.summary()}
+    if args.json:
+        print(to_json(summary))
+    else:
+        print(scene_text(problem, scene, summary))
+    _write_figure(lambda p: result.plot(p), _plot_path(args, f"simulate_{scene}"), args)
+
+
+def cmd_simulate(args) -> int:
+    from .report import format_table, to_json
+    from .simulate import (STUDY_COLUMNS, SWEEP_COLUMNS, lag_onset_spm, parse_spm_range, plot_sweep,
+                           plot_tolerance_study, simulate_scene, sweep_spm, tolerance_study)
+
+    spms = parse_spm_range(args.spm) if args.spm is not None else None
+    if spms is not None:
+        args.spm = spms if len(spms) > 1 else str(spms[0])
+    problem = _load(args)
+    scene = _scene_name(args, problem)
+    options = _sim_options(args)
+    if args.study == "tolerance":
+        if isinstance(args.spm, list):
+            from .errors import ProblemError
+
+            raise ProblemError("--spm", "", "the tolerance study runs at one speed, not a range")
+        study = tolerance_study(problem, scene, problem.spm, progress=not args.json)
+        if args.json:
+            print(to_json(study))
+        else:
+            ref = study["reference"]
+            print(f"work-precision of scene {scene!r} at {study['spm']:g} spm against a reference at rtol "
+                  f"{ref['rtol']:g} (impact {ref['impact_velocity_m_s']:.4f} m/s at {ref['impact_angle_deg']:.3f} deg, "
+                  f"release {ref['release_angle_deg']:.3f} deg; {ref['cpu_time_s']:.2f} s CPU)")
+            print(format_table([r for r in study["rows"] if "failed" not in r], STUDY_COLUMNS))
+            for r in study["rows"]:
+                if "failed" in r:
+                    print(f"failed: {r['method']} rtol {r['rtol']:g} smoothing {r['smoothing_mm']:g} mm: {r['failed']}")
+        _write_figure(lambda p: plot_tolerance_study(study, p), _plot_path(args, f"tolerance_{scene}"), args)
+        return 0
+    if isinstance(args.spm, list):
+        rows = sweep_spm(problem, scene, args.spm, options, progress=not args.json)
+        onset = lag_onset_spm(rows)
+        if args.json:
+            print(to_json({"scene": scene, "lag_onset_spm": onset, "rows": rows}))
+        else:
+            print(format_table(rows, SWEEP_COLUMNS, title=f"{problem.name}: scene {scene!r}, speed sweep "
+                                                          f"(interval times {problem.timing.interval_times})"))
+            print("\nthe follower lags from " + (f"{onset:g} spm" if onset is not None else "no speed of the sweep"))
+        _write_figure(lambda p: plot_sweep(rows, p), _plot_path(args, f"sweep_{scene}"), args)
+        return 0
+    result = simulate_scene(problem, scene, problem.spm, options=options)
+    _report_scene(args, problem, scene, result)
+    return 0
+
+
+def cmd_verify(args) -> int:
+    from .design import read_design
+    from .errors import ProblemError
+    from .problem import load_problem
+    from .simulate import simulate_scene
+
+    data, stroke = read_design(args.design)
+    problem_file = args.problem or data.get("problem_file")
+    if not problem_file:
+        raise ProblemError(args.design, "problem_file", "is missing: pass --problem FILE")
+    path = Path(problem_file)
+    if not path.is_absolute() and not path.exists() and (Path(args.design).parent / path).exists():
+        path = Path(args.design).parent / path
+    problem = load_problem(path, list(args.overrides) + [f"machine.spm={float(data['spm'])!r}"])
+    args.problem = str(path)
+    scene = _scene_name(args, problem)
+    result = simulate_scene(problem, scene, problem.spm, stroke=stroke, options=_sim_options(args))
+    _report_scene(args, problem, scene, result, {"design": str(args.design), "objective": data.get("objective")})
+    return 0
+
+
+def _simulation_arguments(p) -> None:
+    p.add_argument("--scene", help="scene of the problem file ([scenes.NAME]; default: release, else the first)")
+    p.add_argument("--method", default="cvodes", choices=("cvodes", "idas"), help="SUNDIALS integrator (default cvodes)")
+    p.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance (default 1e-5: impact velocity to ~1e-4 m/s)")
+    p.add_argument("--atol", type=float, default=1e-6,
+                   help="absolute tolerance in scaled states: positions in mm, velocities in m/s (default 1e-6)")
+    p.add_argument("--smoothing-mm", type=float, default=0.0,
+                   help="smooth the contact switches over this width (mm; default 0 = hard switches)")
+
+
 # --------------------------------------------------------------------------- parser
 
 
@@ -259,6 +365,45 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--only", action="append", metavar="NAME", help="run only this benchmark (repeatable)")
     p.add_argument("--json", action="store_true", help="print only JSON on stdout")
     p.set_defaults(run=cmd_bench)
+
+    p = sub.add_parser("simulate", parents=[problem],
+                       help="contact model over one cycle: impact, lag, gap N, needle release (CasADi CVODES)",
+                       description="Integrate a scene of the problem's contact model ([model], [scenes.NAME]) over one "
+                                   "cam cycle with its driven body following the problem's stroke, from rest. Prints the "
+                                   "impact velocity and angle of the control member on the stop, the lag behind the "
+                                   "shell and when it ends, the smallest remaining gap N before the impact, the needle "
+                                   "release angle and whether it was premature, peak pad, contact and drive forces. "
+                                   "--spm START:STOP:STEP sweeps the speed; --study tolerance prints a work-precision "
+                                   "table. Cam angles: 360 deg per cycle, 0 at the start of the first interval.",
+                       epilog="Examples: strokeopt simulate problems/deco2000_needle_bar.toml --scene release --spm 600; "
+                              "strokeopt simulate problems/deco2000_needle_bar.toml --spm 300:1200:20 --plot sweep.png; "
+                              "strokeopt simulate problems/deco2000_needle_bar.toml --set "
+                              "model.springs.k2.stiffness_N_m=1240 --set model.contacts.c32.gap_mm=6.5")
+    p.add_argument("--spm", help="stitches per minute, or a sweep START:STOP:STEP (default: machine.spm of the file)")
+    p.add_argument("--law", help="use this motion law for every move (see 'strokeopt laws')")
+    p.add_argument("--chi", type=float, help="shape parameter chi of the modified sine law")
+    _simulation_arguments(p)
+    p.add_argument("--study", choices=("tolerance",),
+                   help="'tolerance': error of impact velocity and release angle against a tight reference vs CPU "
+                        "time, over tolerances and smoothing widths")
+    p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_simulate_<scene>.png; "
+                                                  "'none' for no figure)")
+    p.set_defaults(run=cmd_simulate)
+
+    p = sub.add_parser("verify", help="simulate a scene with the stroke of a design.json (written by the design solve)",
+                       description="Re-simulate an optimised stroke: read DESIGN.json (its exact stroke, speed and "
+                                   "problem file) and integrate a scene of the problem's contact model with it, "
+                                   "reporting the same results as 'simulate'.",
+                       epilog="Example: strokeopt verify strokeopt-out/design.json --scene release --plot verify.png")
+    p.add_argument("design", metavar="DESIGN.json", help="design file written by the design solve")
+    p.add_argument("--problem", help="problem file (default: the problem_file recorded in DESIGN.json)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY.PATH=VALUE",
+                   help="override a value of the problem file (e.g. --set model.springs.k2.stiffness_N_m=1240)")
+    p.add_argument("--json", action="store_true", help="print only JSON on stdout (for scripts)")
+    p.add_argument("--verbose", action="store_true", help="print integrator output")
+    _simulation_arguments(p)
+    p.add_argument("--plot", metavar="FILE", help="figure file ('none' for no figure)")
+    p.set_defaults(run=cmd_verify)
     return parser
 
 
