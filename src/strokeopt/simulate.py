@@ -172,23 +172,33 @@ def simulate_scene(problem, scene: str, spm: float | None = None, stroke=None,
     spans = [p.duration for p in stroke.pieces]
     n_out = int(min(max(math.ceil(max(spans) / period * 360.0 / opts.resolution_deg), 20), 4000))
     integ, grid = _integrator(ode, opts, n_out)
+
+    def advance(k, piece, z, pk):
+        try:
+            res = integ(x0=z, p=pk)
+        except RuntimeError as exc:
+            raise SolverError(f"{opts.method} failed in stroke piece {k + 1} ({piece.label}) of scene {scene!r} at "
+                              f"{spm:g} spm: {str(exc).splitlines()[-1][:200]} (tighten or loosen the tolerances, "
+                              f"or raise max_num_steps)") from None
+        return np.asarray(res["xf"]), int(integ.stats().get("nsteps", 0) or 0)
+
+    return _run(problem, sc, scene, spm, stroke, period, ode, grid, advance, opts, cpu0)
+
+
+def _run(problem, sc, scene, spm, stroke, period, ode, grid, advance, opts, cpu0) -> SceneResult:
+    """Integrate piece by piece with ``advance(k, piece, z0, p) -> (states on grid[1:], steps)``; collect results."""
     nx = ode.state_size
     z = np.zeros(nx)
-    ts, zs, ps, sig = [], [], [], []
+    zs, ps, sig = [], [], []
     steps = 0
     for k, piece in enumerate(stroke.pieces):
         if piece.duration <= 0:
             continue
         pk = [k, piece.t_start, piece.duration]
         if nx:
-            try:
-                res = integ(x0=z, p=pk)
-            except RuntimeError as exc:
-                raise SolverError(f"{opts.method} failed in stroke piece {k + 1} ({piece.label}) of scene {scene!r} at "
-                                  f"{spm:g} spm: {str(exc).splitlines()[-1][:200]} (tighten or loosen the tolerances, "
-                                  f"or raise max_num_steps)") from None
-            zk = np.hstack([z[:, None], np.asarray(res["xf"])])
-            steps += int(integ.stats().get("nsteps", 0) or 0)
+            xf, nst = advance(k, piece, z, pk)
+            zk = np.hstack([z[:, None], xf])
+            steps += nst
         else:
             zk = np.zeros((0, len(grid)))
         if not np.all(np.isfinite(zk)):
@@ -214,6 +224,38 @@ def simulate_scene(problem, scene: str, spm: float | None = None, stroke=None,
                          drive.ravel(), {}, 0.0, opts, sc.driven, {"nsteps": steps, "n_output": int(Z.shape[1])})
     result.metrics = scene_metrics(result, sc)
     result.cpu_time_s = time.process_time() - cpu0
+    return result
+
+
+def simulate_scene_scipy(problem, scene: str, spm: float | None = None, rtol: float = 1e-6, atol: float = 1e-7,
+                         method: str = "Radau") -> SceneResult:
+    """The same scene, stroke restarts, scaling, output grid and metrics, integrated by scipy's
+    ``solve_ivp`` (the reference peer of ``strokeopt bench``; right-hand side and Jacobian are the
+    scene's CasADi Functions called from Python)."""
+    from scipy.integrate import solve_ivp
+
+    opts = SimulationOptions(method="cvodes", rtol=rtol, atol=atol)
+    sc = problem.scenes[scene]
+    spm = float(problem.spm if spm is None else spm)
+    stroke = problem.stroke(spm)
+    period = problem.timing.period(spm)
+    cpu0 = time.process_time()
+    sign, s_ref = _drive_reference(problem)
+    ode = sc.build(stroke, sign, s_ref, 0.0)
+    spans = [p.duration for p in stroke.pieces]
+    n_out = int(min(max(math.ceil(max(spans) / period * 360.0 / opts.resolution_deg), 20), 4000))
+    grid = np.linspace(0.0, 1.0, n_out + 1)
+    jac = ca.Function("scene_jacobian", [ode.dae["t"], ode.dae["x"], ode.dae["p"]], [ca.jacobian(ode.dae["ode"], ode.dae["x"])])
+
+    def advance(k, piece, z, pk):
+        sol = solve_ivp(lambda s, y: np.asarray(ode.rhs(s, y, pk)).ravel(), (0.0, 1.0), z, method=method,
+                        t_eval=grid[1:], rtol=rtol, atol=atol, jac=lambda s, y: np.asarray(jac(s, y, pk)))
+        if not sol.success:
+            raise SolverError(f"scipy {method} failed in piece {k + 1} of scene {scene!r}: {sol.message}")
+        return sol.y, int(sol.nfev)
+
+    result = _run(problem, sc, scene, spm, stroke, period, ode, grid, advance, opts, cpu0)
+    result.options = replace(opts, method=f"scipy-{method}")
     return result
 
 
@@ -567,3 +609,44 @@ SWEEP_COLUMNS = [("spm", "spm"), ("impact_velocity_m_s", "impact m/s"), ("impact
 STUDY_COLUMNS = [("method", "method"), ("smoothing_mm", "smoothing mm"), ("rtol", "rtol"),
                  ("impact_velocity_error_m_s", "impact v error m/s"), ("release_angle_error_deg", "release error deg"),
                  ("impact_angle_error_deg", "impact angle error deg"), ("nsteps", "steps"), ("cpu_time_s", "CPU s")]
+
+
+# --------------------------------------------------------------------------- benchmark (strokeopt bench)
+
+from .bench import BenchResult, BenchRow, benchmark, reference_problem_path  # noqa: E402
+
+BENCH_ACCURACY_M_S = 1e-3  # impact velocity accuracy both integrators must reach
+
+
+@benchmark("simulate_release", "one cycle of the needle-bar release scene at 600 spm (CasADi CVODES vs scipy Radau, "
+                               "impact velocity to 1e-3 m/s)", target_s=0.5)
+def _bench_simulate_release() -> BenchResult:
+    from .problem import load_problem
+
+    problem = load_problem(reference_problem_path())
+    spm = 600.0
+    ref = simulate_scene(problem, "release", spm, options=SimulationOptions(rtol=1e-8, atol=1e-9))
+    v_ref = ref.metrics["impact_velocity_m_s"]
+    runs = [simulate_scene(problem, "release", spm) for _ in range(3)]
+    fast = min(r.cpu_time_s for r in runs)
+    err_fast = abs(runs[0].metrics["impact_velocity_m_s"] - v_ref)
+    rows = [BenchRow("CasADi CVODES, rtol 1e-5 (default), CPU", fast, f"impact velocity error {err_fast:.1e} m/s")]
+    notes = [f"reference: CVODES rtol 1e-8, impact velocity {v_ref:.5f} m/s ({ref.cpu_time_s:.2f} s CPU)"]
+    slow, err_slow = None, None
+    for rtol in (1e-3, 1e-4, 1e-5):  # the loosest scipy tolerance that reaches the same accuracy
+        peer = simulate_scene_scipy(problem, "release", spm, rtol=rtol, atol=rtol / 10)
+        err = abs(peer.metrics["impact_velocity_m_s"] - v_ref) if peer.metrics["impact_velocity_m_s"] is not None else math.inf
+        rows.append(BenchRow(f"scipy solve_ivp Radau, rtol {rtol:g}, CPU", peer.cpu_time_s,
+                             f"impact velocity error {err:.1e} m/s" + ("" if err <= BENCH_ACCURACY_M_S else " (not accurate enough)")))
+        if err <= BENCH_ACCURACY_M_S:
+            slow, err_slow = peer.cpu_time_s, err
+            break
+    if slow is None:
+        notes.append("scipy Radau did not reach 1e-3 m/s down to rtol 1e-5; ratio against its last run")
+        slow = rows[-1].seconds
+    notes.append("same scene ODE, stroke restarts, scaling, output grid and event location for both; scipy calls the "
+                 "CasADi right-hand side and Jacobian from Python; target: CasADi >= 20x faster")
+    if err_fast > BENCH_ACCURACY_M_S:
+        notes.append(f"CasADi default missed the accuracy: {err_fast:.1e} m/s")
+    return BenchResult(rows=rows, measured_s=fast, ratio=slow / fast, ratio_label="scipy Radau / CasADi CVODES (CPU)",
+                       notes=notes)
