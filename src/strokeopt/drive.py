@@ -477,14 +477,16 @@ class Sizing:
         rpm = 60 / (2 * math.pi)
         fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.8), constrained_layout=True)
         m = c.motor
-        w = np.linspace(0, m.rated_speed, 50)
+        w = np.linspace(-m.rated_speed, m.rated_speed, 101)
+        drive_peak = min(m.peak_torque, self.limits.peak_limit_pct / 100 * m.rated_torque)
         for sign in (1, -1):
-            ax1.plot(sign * w * rpm, sign * m.continuous_torque(w), color="tab:green",
+            ax1.plot(w * rpm, sign * m.continuous_torque(w), color="tab:green",
                      label="continuous (thermal)" if sign > 0 else None)
-            ax1.plot(sign * w * rpm, sign * m.peak_envelope(w), color="tab:red", label="motor peak" if sign > 0 else None)
-            drive_peak = min(m.peak_torque, self.limits.peak_limit_pct / 100 * m.rated_torque)
-            ax1.plot(sign * w * rpm, sign * np.full_like(w, drive_peak), color="tab:red", ls=":",
+            ax1.plot(w * rpm, sign * m.peak_envelope(w), color="tab:red", label="motor peak" if sign > 0 else None)
+            ax1.plot(w * rpm, sign * np.full_like(w, drive_peak), color="tab:red", ls=":",
                      label=f"drive limit ({self.limits.peak_limit_pct:g} % rated)" if sign > 0 else None)
+        for x in (-m.rated_speed * rpm, m.rated_speed * rpm):
+            ax1.axvline(x, color="0.5", lw=0.8, ls="--")
         ax1.plot(terms.omega * rpm, terms.total, color="tab:blue", lw=1.2, label="cycle")
         rms = c.check("rms_torque").value
         ax1.axhline(rms, color="tab:blue", ls="--", lw=0.8, label=f"RMS {rms:.2f} N m")
@@ -498,7 +500,7 @@ class Sizing:
         for name, val in terms.as_dict().items():
             val = np.broadcast_to(val, angle.shape)
             if np.max(np.abs(val)) > 1e-9:
-                ax2.plot(angle, val, lw=0.9, label=name)
+                ax2.plot(angle, val, lw=0.9, label=name, ls="--" if name == "rotor_inertia" else "-")
         ax2.set_xlabel("cam angle [deg]")
         ax2.set_ylabel("motor torque [N m]")
         ax2.set_xlim(0, 360)

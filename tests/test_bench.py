@@ -1,0 +1,53 @@
+"""`strokeopt bench`: the registry and the catalogue-sizing benchmark (structure and agreement, no timing goals)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from strokeopt import bench
+from strokeopt.cli import main
+
+
+def test_registry_and_duplicate_names():
+    assert "size_catalogue" in bench.REGISTRY
+    with pytest.raises(ValueError):
+        bench.benchmark("size_catalogue", "again")(lambda: None)
+
+
+def test_loop_reference_agrees_with_the_vectorised_sizing(reference):
+    from strokeopt.drive import _candidates
+
+    spec = reference.drive
+    cat = spec.catalogue()
+    motors, pulleys = list(cat.motors.values())[:2], cat.pulleys_of("GT3")[:2]
+    stroke = reference.stroke(600)
+    kin = stroke.sample(301)
+    belt = spec.belt_spec(cat)
+    loop = bench.size_pairs_loop(kin, motors, pulleys, spec.load, spec.limits, belt, 600, stroke.period)
+    vec = _candidates(kin, motors, pulleys, spec.load, spec.limits, belt, 600, stroke.period)
+    assert len(loop) == len(vec) == 4
+    for checks, cand in zip(loop, vec):
+        assert [c.name for c in checks] == [c.name for c in cand.checks]
+        assert np.array([c.value for c in checks]) == pytest.approx([c.value for c in cand.checks], rel=1e-12)
+
+
+def test_bench_command_json(capsys):
+    assert main(["bench", "--json", "--only", "size_catalogue"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    (r,) = data["benchmarks"]
+    assert r["name"] == "size_catalogue" and r["target_s"] == 0.5
+    assert len(r["rows"]) == 4 and all(row["seconds"] > 0 for row in r["rows"])
+    assert r["measured_s"] == r["rows"][0]["seconds"] and r["ratio"] > 0
+    assert isinstance(r["meets_target"], bool)
+
+
+def test_bench_text_and_unknown_name(capsys):
+    results = [bench.BenchResult([bench.BenchRow("x", 0.01)], 0.01, 3.0, "y / x", name="demo", description="d",
+                                 target_s=0.5)]
+    text = bench.format_results(results)
+    assert "ratio y / x: 3.0x" in text and "target: under 0.5 s" in text and "met" in text
+    assert main(["bench", "--only", "nope"]) == 2
+    assert "unknown benchmark 'nope'" in capsys.readouterr().err
