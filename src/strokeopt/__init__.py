@@ -17,7 +17,8 @@ exported here.
 """
 
 from .actuators import Belt, Catalogue, Pulley, ServoMotor, load_catalogue
-from .drive import Check, DriveLimits, DriveSpec, Load, LoadForce, drive_checks, load_torque, size_drive
+from .drive import (Check, DriveLimits, DriveSpec, Load, LoadForce, drive_checks, load_torque, optimal_radius,
+                    size_drive)
 from .errors import ProblemError, SolverError, StrokeoptError
 from .laws import LAW_NAMES, Characteristics, MotionLaw, law_table, make_law
 from .problem import Problem, load_problem
@@ -30,6 +31,6 @@ __all__ = [
     "ProblemError", "SolverError", "StrokeFunction", "StrokeoptError", "TimingDiagram", "Transmission",
     "gt3_pitch_diameter", "law_table", "load_problem", "make_law",
     "Belt", "Catalogue", "Check", "DriveLimits", "DriveSpec", "Load", "LoadForce", "Pulley", "ScrewLever", "ServoMotor",
-    "SliderCrank", "drive_checks", "load_catalogue", "load_torque", "size_drive",
+    "SliderCrank", "drive_checks", "load_catalogue", "load_torque", "optimal_radius", "size_drive",
 ]
 __version__ = "0.1.0"

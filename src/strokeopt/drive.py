@@ -678,21 +678,42 @@ def optimal_radius(motor, load: Load, kin, pulley_inertia=None, bounds=(2e-3, 0.
     base = load_torque(0.0, BeltPulley(2.0), load, kin.s, kin.v, kin.a)  # r = 1: eps = a, mu = 1
     acc = np.asarray(base.eps, dtype=float)
     force = np.asarray(base.load_force, dtype=float)
-    r = ca.MX.sym("r")
-    z = ca.MX.sym("z")
+    j_rotor = _rotor_inertia(motor)
+
+    def torque_np(radius):
+        jp = float(pulley_inertia(2 * radius)) if pulley_inertia is not None else 0.0
+        return (j_rotor + jp) * acc / radius + radius * force
+
+    # The peak is set by a few samples: solve on those that peak somewhere on a grid of radii,
+    # then check every sample at the optimum and add any that exceeds it (an active-set loop).
+    active = set()
+    for radius in np.geomspace(bounds[0], bounds[1], 48):
+        active.update(np.argsort(-np.abs(torque_np(radius)))[:3].tolist())
+    r = ca.SX.sym("r")
+    z = ca.SX.sym("z")
     jp = pulley_inertia(2 * r) if pulley_inertia is not None else 0.0
-    torque = (_rotor_inertia(motor) + jp) * ca.DM(acc) / r + r * ca.DM(force)
-    nlp = {"x": ca.vertcat(r, z), "f": z, "g": ca.vertcat(torque - z, torque + z)}
     opts = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "ipopt.tol": 1e-10}
     opts.update(solver_options or {})
-    solver = ca.nlpsol("radius", "ipopt", nlp, opts)
-    r0 = float(np.clip(math.sqrt(_rotor_inertia(motor) / load.moving_mass), *bounds))
-    n = len(acc)
-    res = solver(x0=[r0, 1.0], lbx=[bounds[0], 0.0], ubx=[bounds[1], ca.inf],
-                 lbg=np.r_[np.full(n, -np.inf), np.zeros(n)], ubg=np.r_[np.zeros(n), np.full(n, np.inf)])
-    if not solver.stats()["success"]:
-        raise SolverError(f"pulley radius optimisation for {getattr(motor, 'name', 'motor')} failed: "
-                          f"{solver.stats()['return_status']}")
-    r_opt, z_opt = (float(x) for x in np.asarray(res["x"]).ravel())
+    r0 = float(np.clip(math.sqrt(j_rotor / load.moving_mass), *bounds))
+    for _ in range(20):
+        idx = sorted(active)
+        torque = (j_rotor + jp) * ca.DM(acc[idx]) / r + r * ca.DM(force[idx])
+        nlp = {"x": ca.vertcat(r, z), "f": z, "g": ca.vertcat(torque - z, torque + z)}
+        solver = ca.nlpsol("radius", "ipopt", nlp, opts)
+        n = len(idx)
+        res = solver(x0=[r0, 1.0], lbx=[bounds[0], 0.0], ubx=[bounds[1], ca.inf],
+                     lbg=np.r_[np.full(n, -np.inf), np.zeros(n)], ubg=np.r_[np.zeros(n), np.full(n, np.inf)])
+        if not solver.stats()["success"]:
+            raise SolverError(f"pulley radius optimisation for {getattr(motor, 'name', 'motor')} failed: "
+                              f"{solver.stats()['return_status']}")
+        r0, z0 = (float(x) for x in np.asarray(res["x"]).ravel())
+        full = np.abs(torque_np(r0))
+        worst = int(np.argmax(full))
+        if worst in active or full[worst] <= z0 * (1 + 1e-7):  # within IPOPT's constraint tolerance
+            break
+        active.add(worst)
+    else:
+        raise SolverError("pulley radius optimisation did not settle on its peak samples in 20 rounds")
+    r_opt, z_opt = r0, float(np.max(np.abs(torque_np(r0))))
     jp_opt = float(pulley_inertia(2 * r_opt)) if pulley_inertia is not None else 0.0
     return RadiusOptimum(getattr(motor, "name", ""), r_opt, z_opt, jp_opt, 2 * r_opt * math.pi / pitch)
