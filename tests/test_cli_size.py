@@ -113,3 +113,10 @@ def test_set_override_reaches_the_drive(capsys, reference_path):
                              "--pulley-teeth", "28", "--spm", "600", "--set", "drive.peak_limit_pct=100"])
     c = data["candidates"][0]
     assert data["inputs"]["peak_limit_pct"] == 100 and not c["feasible"] and c["binding"] == "overload"
+
+
+def test_problem_motor_and_belt_must_be_in_the_catalogue(capsys, reference_path):
+    _one_line_error(capsys, ["size", str(reference_path), "--plot", "none", "--set", "drive.motor=055U2B99"],
+                    str(reference_path), "drive.motor", "unknown motor '055U2B99'")
+    _one_line_error(capsys, ["size", str(reference_path), "--plot", "none", "--set", "drive.belt=GT3-3MR-12"],
+                    str(reference_path), "drive.belt", "unknown belt 'GT3-3MR-12'")

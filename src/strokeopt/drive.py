@@ -605,6 +605,8 @@ def size_drive(problem, spm: float | None = None, *, catalogue=None, motors=None
         raise ProblemError(str(problem.file), "drive", "the problem has no [drive] section (motor, moving mass, ...)")
     spm = problem.spm if spm is None else spm
     cat = catalogue if catalogue is not None else spec.catalogue()
+    if spec.motor is not None:
+        cat.motor(spec.motor, (spec.file, "drive.motor"))  # the problem's own motor must exist
     chosen = [cat.motor(n) for n in motors] if motors else list(cat.motors.values())
     if teeth:
         pulleys = []
