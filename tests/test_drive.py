@@ -264,3 +264,14 @@ def test_load_force_constant_and_downward_spring():
     assert push(np.array([0.0, 1.0])) == pytest.approx([-5.0, -5.0])
     spring = LoadForce("stop", "spring", -1.0, 2.0, 100.0, 0.01)
     assert spring(np.array([0.0, 0.02])) == pytest.approx([0.0, -(2.0 + 100.0 * 0.01)])
+
+
+def test_problem_catalogue_files_are_relative_to_the_problem(write_problem, tmp_path):
+    (tmp_path / "parts.toml").write_text(
+        '[[motor]]\nname = "tiny"\nrated_speed_rpm = 6000\nrated_torque_N_m = 0.3\nstall_torque_N_m = 0.35\n'
+        'peak_torque_N_m = 0.9\nrotor_inertia_kg_cm2 = 0.05\n', encoding="utf-8")
+    p = load_problem(write_problem(lambda t: t.replace("[drive]\n", '[drive]\ncatalogues = ["parts.toml"]\n')))
+    s = size_drive(p, 600, motors=["tiny"], teeth=[28])
+    c = s.candidates[0]
+    assert c.motor.name == "tiny" and not c.feasible  # 0.3 N m rated cannot hold the spring and gravity
+    assert c.check("rms_torque").value > 0.3

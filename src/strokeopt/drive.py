@@ -36,7 +36,7 @@ motor torque ``T = (J_rotor + J_transmission) eps + mu F``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
