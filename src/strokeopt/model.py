@@ -158,7 +158,7 @@ def _name_list(f: "Fields", key: str, known, what: str, length: int | None = Non
 
 
 def _parse_element(f: "Fields", name: str, kind_default: str, bodies: dict, laws: dict) -> Element:
-    kind = f.string("kind", kind_default, choices=ELEMENT_KINDS if kind_default != "spring" else ("spring",))
+    kind = f.string("kind", kind_default, choices=("contact", "grip") if kind_default != "spring" else ("spring",))
     pair = _name_list(f, "bodies", set(bodies) | {FRAME}, "body", length=2)
     if pair[0] == pair[1]:
         raise f.error("bodies", f"an element needs two different bodies, got {pair[0]!r} twice")

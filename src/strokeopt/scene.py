@@ -193,6 +193,11 @@ class SceneODE:
         drive = masses[scene.driven].mass * ad - force_on[scene.driven]
         ode = ca.vertcat(dur * 1e3 * z[n:], dur * acc)
         self.dae = {"x": z, "p": p, "t": sigma, "ode": ode}
+        # the same ODE over a sub-interval [sigma_a, sigma_b] of a piece, in its own time theta in [0, 1]
+        theta, pr = ca.SX.sym("theta"), ca.SX.sym("pr", 5)
+        sig_ab = pr[3] + theta * (pr[4] - pr[3])
+        ode_sub = ca.substitute([(pr[4] - pr[3]) * ode], [sigma, p], [sig_ab, pr[:3]])[0]
+        self.refine_dae = {"x": z, "p": pr, "t": theta, "ode": ode_sub}
         self.outputs = ca.Function(
             "scene_outputs", [sigma, z, p],
             [t0 + tau, xd, vd, ad, acc, ca.vertcat(*forces) if forces else ca.SX(0, 1), drive],
