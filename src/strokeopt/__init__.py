@@ -10,6 +10,9 @@ The data flow::
                               solution
         -> Drive              transmission + motor + load: torque, transmission.py,
                               speed, checks; catalogue sizing      actuators.py, drive.py
+        -> Scene simulation   contact model as data; a scene's     model.py, scene.py,
+                              CasADi ODE, CVODES over one cycle:   simulate.py
+                              impact, lag, gap N, needle release
         -> Report             tables, JSON, plots                  report.py, plots.py
 
 ``cli.py`` ties these together; notebooks and tests use the same public API
@@ -21,12 +24,17 @@ from .drive import (Check, DriveLimits, DriveSpec, Load, LoadForce, drive_checks
                     size_drive)
 from .errors import ProblemError, SolverError, StrokeoptError
 from .laws import LAW_NAMES, Characteristics, MotionLaw, law_table, make_law
+from .model import Body, Element, ForceLaw, Model
 from .problem import Problem, load_problem
+from .scene import Scene, make_scene
+from .simulate import SceneResult, SimulationOptions, simulate_scene, sweep_spm, tolerance_study
 from .stroke import Kinematics, Piece, StrokeFunction
 from .timing import Interval, TimingDiagram
 from .transmission import BeltPulley, ScrewLever, SliderCrank, Transmission, gt3_pitch_diameter
 
 __all__ = [
+    "Body", "Element", "ForceLaw", "Model", "Scene", "SceneResult", "SimulationOptions", "make_scene",
+    "simulate_scene", "sweep_spm", "tolerance_study",
     "LAW_NAMES", "BeltPulley", "Characteristics", "Interval", "Kinematics", "MotionLaw", "Piece", "Problem",
     "ProblemError", "SolverError", "StrokeFunction", "StrokeoptError", "TimingDiagram", "Transmission",
     "gt3_pitch_diameter", "law_table", "load_problem", "make_law",

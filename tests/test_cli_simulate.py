@@ -1,0 +1,120 @@
+"""`strokeopt simulate` and `strokeopt verify` as a user and a script see them."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from strokeopt.cli import main
+
+
+def test_simulate_json(capsys, reference_path, tmp_path):
+    fig = tmp_path / "sim.png"
+    assert main(["simulate", str(reference_path), "--scene", "release", "--spm", "600", "--json", "--plot", str(fig)]) == 0
+    out, err = capsys.readouterr()
+    data = json.loads(out)  # stdout is only JSON
+    assert data["scene"] == "release" and data["spm"] == 600
+    for key in ("impact_velocity_m_s", "impact_angle_deg", "lag_end_angle_deg", "min_gap_N_mm", "release_angle_deg",
+                "peak_pad_force_N", "cpu_time_s", "gap_N_mm", "peak_drive_force_N"):
+        assert isinstance(data[key], float), key
+    assert data["premature_release"] is False
+    assert 2.7 < data["impact_velocity_m_s"] < 3.0  # thesis ch. 6: 2.90 m/s at 600 spm
+    assert fig.stat().st_size > 10_000 and str(fig) in err
+
+
+def test_simulate_text_states_gap_N(capsys, reference_path):
+    assert main(["simulate", str(reference_path), "--spm", "500", "--plot", "none"]) == 0
+    out = capsys.readouterr().out
+    assert "scene 'release'" in out and "gap N used by the model: 7.4 mm" in out
+    assert "impact of control on the stop" in out and "not premature" in out and "CPU time" in out
+
+
+def test_set_reaches_the_model(capsys, reference_path):
+    args = ["simulate", str(reference_path), "--spm", "600", "--json", "--plot", "none"]
+    assert main(args) == 0
+    base = json.loads(capsys.readouterr().out)
+    assert main(args + ["--set", "model.springs.k2.stiffness_N_m=1240", "--set", "model.contacts.c32.gap_mm=6.5"]) == 0
+    stiff = json.loads(capsys.readouterr().out)
+    assert stiff["gap_N_mm"] == pytest.approx(6.5)
+    assert stiff["impact_velocity_m_s"] < base["impact_velocity_m_s"]
+
+
+def test_sweep(capsys, reference_path, tmp_path):
+    fig = tmp_path / "sweep.png"
+    assert main(["simulate", str(reference_path), "--spm", "300:400:50", "--json", "--plot", str(fig)]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert [r["spm"] for r in data["rows"]] == [300, 350, 400]
+    assert data["lag_onset_spm"] == 350
+    assert fig.stat().st_size > 10_000
+    assert main(["simulate", str(reference_path), "--spm", "300:400:50", "--plot", "none"]) == 0
+    out = capsys.readouterr().out
+    assert "impact m/s" in out and "lags from 350 spm" in out
+
+
+@pytest.mark.slow
+def test_tolerance_study(capsys, reference_path, tmp_path):
+    fig = tmp_path / "tol.png"
+    assert main(["simulate", str(reference_path), "--spm", "600", "--study", "tolerance", "--json", "--plot", str(fig)]) == 0
+    data = json.loads(capsys.readouterr().out)
+    methods = {(r["method"], r["smoothing_mm"] > 0) for r in data["rows"]}
+    assert methods == {("cvodes", False), ("idas", False), ("cvodes", True)}
+    hard = [r for r in data["rows"] if r["method"] == "cvodes" and r["smoothing_mm"] == 0]
+    assert hard[-1]["impact_velocity_error_m_s"] < hard[0]["impact_velocity_error_m_s"]
+    assert fig.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--scene", "relase"], "no scene 'relase'"),
+    (["--spm", "300:200:10"], "STOP >= START"),
+    (["--spm", "fast"], "expected SPM or START:STOP:STEP"),
+    (["--set", "model.contacts.c32.gap_mm=-6.5"], "model.contacts.c32.gap_mm"),
+    (["--set", "model.bodies.needle.mass_g=0"], "model.bodies.needle.mass_g: must be positive"),
+    (["--rtol", "0"], "rtol"),
+    (["--study", "tolerance", "--spm", "300:400:50"], "one speed"),
+])
+def test_bad_input_exit_2(capsys, reference_path, args, words):
+    assert main(["simulate", str(reference_path), "--plot", "none"] + args) == 2
+    err = capsys.readouterr().err
+    assert words in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("edit, words", [
+    (('elements = ["k2", "k3", "pad", "c21", "c32", "c13", "c31"]', 'elements = ["k2", "k3", "pad", "c21", "c77"]'),
+     "scenes.release.elements: unknown element 'c77'"),
+    (('[model.springs.k3]\nbodies = ["control", "cage"]', '[model.springs.k3]\nbodies = ["control", "basket"]'),
+     "model.springs.k3.bodies: unknown body 'basket'"),
+    (('label = "3 clamp cage with the two balls"', 'label = "3 clamp cage"\ndriven = true'),
+     "exactly one body must be driven"),
+])
+def test_bad_problem_file_exit_2(capsys, write_problem, edit, words):
+    path = write_problem(lambda t: t.replace(*edit))
+    assert main(["simulate", str(path), "--plot", "none"]) == 2
+    err = capsys.readouterr().err
+    assert words in err and "Traceback" not in err
+
+
+def test_verify_design(capsys, reference_path, tmp_path):
+    from strokeopt import load_problem
+    from strokeopt.design import solve_design
+
+    design = solve_design(load_problem(reference_path), objective="min_jerk", spm=600)
+    path = design.write(tmp_path)[0]
+    assert main(["verify", str(path), "--scene", "release", "--json", "--plot", "none"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["design"] == str(path) and data["spm"] == 600 and data["stroke"] == "optimal"
+    assert data["impact_velocity_m_s"] > 0 and data["release_angle_deg"] > data["impact_angle_deg"]
+
+
+def test_verify_bad_file(capsys, tmp_path):
+    bad = tmp_path / "design.json"
+    bad.write_text("{}")
+    assert main(["verify", str(bad), "--plot", "none"]) == 2
+    assert "design" in capsys.readouterr().err
+
+
+def test_help_teaches(capsys):
+    with pytest.raises(SystemExit):
+        main(["simulate", "--help"])
+    out = capsys.readouterr().out
+    assert "Example" in out and "--spm" in out and "gap N" in out
