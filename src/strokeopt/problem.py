@@ -22,6 +22,7 @@ from typing import Any
 
 from .design import DesignSettings, parse_design
 from .drive import DriveSpec, parse_drive
+from .servo import ServoSettings, parse_servo
 from .errors import ProblemError
 from .laws import LAW_NAMES, LAW_PARAMETERS, MotionLaw, make_law
 from .model import Model, parse_model
@@ -211,6 +212,7 @@ class Problem:
     scenes: dict[str, Scene] | None = field(default=None, repr=False)  # [scenes.*] (scene.py)
     drive: DriveSpec | None = field(default=None, repr=False)  # [drive]: motor, load, limits (drive.py)
     design: DesignSettings | None = field(default=None, repr=False)  # [design]: optimal stroke (design.py)
+    servo: "ServoSettings | None" = field(default=None, repr=False)  # [servo]: servo loop and belt (servo.py)
 
     @property
     def period(self) -> float:
@@ -279,6 +281,8 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
     drive = parse_drive(drive_table, (path or Path(file)).parent) if drive_table is not None else None
     design_table = top.table("design", required=False)
     design = parse_design(design_table) if design_table is not None else None
+    servo_table = top.table("servo", required=False)
+    servo = parse_servo(servo_table, timing, spm) if servo_table is not None else None
     top.finish()
     return Problem(
         file=path or Path(file),
@@ -294,6 +298,7 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
         scenes=scenes,
         drive=drive,
         design=design,
+        servo=servo,
     )
 
 
