@@ -428,7 +428,7 @@ def scene_metrics(r: SceneResult, sc, refine=None) -> dict:
     d = sc.driven
     if f and f in sc.bodies and f != d:
         lag = r.positions[d] - r.positions[f]
-        m["max_lag_mm"] = float(max(np.max(lag if t_imp is None else lag[t <= t_imp]), 0.0)) * 1e3
+        m["max_lag_mm"] = max(0.0, float(np.max(lag if t_imp is None else lag[t <= t_imp]))) * 1e3
         onset = _event(r, lambda S: S.positions[d] - S.positions[f] - LAG_THRESHOLD,
                        lambda S: S.velocities[d] - S.velocities[f], refine)
         if onset is not None and (t_imp is None or onset[0] < t_imp):  # after the impact the stop holds it back
