@@ -219,6 +219,9 @@ def _report_scene(args, problem, scene, result, extra=None) -> None:
     from .simulate import scene_text
 
     summary = {**(extra or {}), **result.summary()}
+    if args.verbose:
+        print(f"integrator: {result.options.method}, {result.stats['nsteps']} steps, "
+              f"{result.stats['n_output']} output points", file=sys.stderr)
     if args.json:
         print(to_json(summary))
     else:
