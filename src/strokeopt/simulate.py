@@ -117,7 +117,13 @@ class SceneResult:
 
     ``positions``/``velocities``/``accelerations``: per body of the scene (the driven one
     included); ``forces``: per element of the scene (N, positive = compression);
-    ``drive_force``: the force the drive must supply to the driven body (N).
+    ``drive_force``: the force the drive must supply to the driven body, its inertia plus
+    what the elements push back: ``m a - sum of element forces on it`` (N).
+
+    Peak forces are maxima over the output grid. The pad's (a soft polynomial law) agree
+    across tolerances; those of the 1e9 N/m contacts and the drive force they load are
+    impact spikes microseconds long and depend on the grid and the tolerance: read them as
+    orders of magnitude.
     """
 
     scene: str
@@ -695,7 +701,7 @@ def scene_text(problem, scene: str, summary: dict) -> str:
     if s["peak_pad_force_N"] is not None:
         lines.append(f"peak pad force: {s['peak_pad_force_N']:.1f} N")
     lines.append(f"peak force the drive supplies to the {sc.driven}: {s['peak_drive_force_N']:.1f} N")
-    lines.append("peak element forces [N]: " + ", ".join(f"{k} {v:.1f}" for k, v in s["peak_contact_forces_N"].items()))
+    lines.append("peak element forces [N] (on the output grid): " + ", ".join(f"{k} {v:.1f}" for k, v in s["peak_contact_forces_N"].items()))
     sw = "hard switches" if s["smoothing_mm"] == 0 else f"smoothing {s['smoothing_mm']:g} mm"
     lines.append(f"CPU time {s['cpu_time_s']:.3f} s ({s['method']}, rtol {s['rtol']:g}, atol {s['atol']:g}, {sw})")
     return "\n".join(lines)
