@@ -197,6 +197,26 @@ def cmd_bench(args) -> int:
     return 0
 
 
+def cmd_accuracy(args) -> int:
+    from .report import to_json
+    from .servo import accuracy_report, accuracy_text
+
+    problem = _load(args)
+    progress = None
+    if args.compare_laws and not args.json:
+        from tqdm import tqdm
+
+        def progress(items):
+            return tqdm(items, desc="laws", unit="law", file=sys.stderr, leave=False)
+    report, result = accuracy_report(problem, problem.spm, compare_laws=args.compare_laws, progress=progress)
+    if args.json:
+        print(to_json(report))
+    else:
+        print(accuracy_text(report))
+    _write_figure(lambda p: result.plot(p), _plot_path(args, "accuracy"), args)
+    return 0
+
+
 def _sim_options(args):
     from .simulate import SimulationOptions
 
@@ -407,6 +427,23 @@ def build_parser() -> argparse.ArgumentParser:
     _simulation_arguments(p)
     p.add_argument("--plot", metavar="FILE", help="figure file ('none' for no figure)")
     p.set_defaults(run=cmd_verify)
+
+    p = sub.add_parser("accuracy", parents=[problem], help="handover accuracy: servo loop, belt stretch, encoder",
+                       description="Predict how far the bar is from its commanded position at the handover and over "
+                                   "the cycle, from the cascade position/speed loop of the servo drive (sampling, "
+                                   "feed-forwards, gains by a stated rule, [servo]), the belt as a spring between "
+                                   "motor and bar, and the encoder resolution; the error is split into servo "
+                                   "tracking, belt stretch (inertia and load forces) and encoder quantisation. "
+                                   "--compare-laws adds the handover error and the residual vibration of every "
+                                   "classic law on the same drive.",
+                       epilog="Example: strokeopt accuracy problems/deco2000_needle_bar.toml --spm 600 --compare-laws")
+    p.add_argument("--spm", help="stitches per minute (default: machine.spm of the file)")
+    p.add_argument("--law", help="use this motion law for every move (see 'strokeopt laws')")
+    p.add_argument("--chi", type=float, help="shape parameter chi of the modified sine law (0 < chi <= 0.25)")
+    p.add_argument("--compare-laws", action="store_true",
+                   help="also report handover error and residual vibration of every classic law")
+    p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_accuracy.png; 'none' for no figure)")
+    p.set_defaults(run=cmd_accuracy)
     return parser
 
 

@@ -356,13 +356,26 @@ def loop_margins(axis: DriveAxis, settings: ServoSettings, gains: Gains) -> dict
     """Gain margin, phase margin [deg] and modulus margin (distance of the Nyquist curve to -1)."""
     import control
 
-    gm, pm, sm, *_ = control.stability_margins(open_loop(axis, settings, gains))
-    return {"gain_margin": float(gm), "phase_margin_deg": float(pm), "modulus_margin": float(sm)}
+    gms, pms, sms, *_ = control.stability_margins(open_loop(axis, settings, gains), returnall=True)
+    # the gain may rise by the smallest factor > 1 at a phase crossover (the integrators make
+    # crossovers at low frequency where the gain could only fall: those are not margins)
+    up = [float(g) for g in np.atleast_1d(gms) if g > 1]
+    pm = [float(p) for p in np.atleast_1d(pms)]
+    sm = [float(x) for x in np.atleast_1d(sms)]
+    return {"gain_margin": min(up) if up else math.inf, "phase_margin_deg": min(pm) if pm else math.inf,
+            "modulus_margin": min(sm) if sm else math.inf}
 
 
 def _robust(axis: DriveAxis, settings: ServoSettings, gains: Gains) -> bool:
     m = loop_margins(axis, settings, gains)
-    return m["gain_margin"] >= MIN_GAIN_MARGIN and m["modulus_margin"] >= MIN_MODULUS_MARGIN and m["phase_margin_deg"] > 0
+    if not (m["gain_margin"] >= MIN_GAIN_MARGIN and m["modulus_margin"] >= MIN_MODULUS_MARGIN
+            and m["phase_margin_deg"] > 0):
+        return False
+    try:
+        build_loop(axis, settings, gains)
+    except SolverError:
+        return False
+    return True
 
 
 @dataclass
@@ -468,7 +481,8 @@ class AccuracyResult:
 
     @property
     def angle_deg(self) -> np.ndarray:
-        return 360.0 * self.t / self.period
+        """Cam angle of the commanded stroke [deg] (the loop delay, common to every axis, taken out)."""
+        return 360.0 * (self.t - self.loop.settings.sum_small_time_constants) / self.period
 
     def at_handover(self, arr) -> float:
         return float(np.interp(self.handover_time, self.t, arr))
@@ -478,13 +492,20 @@ class AccuracyResult:
         t1 = self.handover_time + self.loop.settings.handover_window / 360.0 * self.period
         return (self.t >= self.handover_time) & (self.t <= t1)
 
-    def at_handover_worst(self, arr) -> float:
-        """The value of ``arr`` of largest magnitude over the handover window (signed)."""
+    def _worst(self, arr):
+        """``arr`` at the instant of the largest |bar error| in the handover window (the end of the
+        handover move itself included, interpolated)."""
         w = self._window()
-        if not np.any(w):
-            return self.at_handover(arr)
-        vals = np.concatenate([[self.at_handover(arr)], np.asarray(arr)[w]])
-        return float(vals[np.argmax(np.abs(vals))])
+        err = self.error
+        at_end = self.at_handover(err)
+        if np.any(w):
+            idx = np.flatnonzero(w)[np.argmax(np.abs(err[w]))]
+            if abs(err[idx]) > abs(at_end):
+                return float(np.asarray(arr)[idx])
+        return self.at_handover(arr)
+
+    def at_handover_worst(self, arr) -> float:
+        return self._worst(arr)
 
     @property
     def handover_error(self) -> float:
@@ -501,25 +522,19 @@ class AccuracyResult:
 
     @property
     def residual_vibration(self) -> float:
-        """Largest deviation [m] of the bar error in the dwell after the handover from its value at
-        the end of that dwell (where the vibration has died out): the residual vibration."""
+        """Residual vibration of the belt mode [m]: the largest deviation of the belt stretch in the
+        dwell after the handover from its value at the end of that dwell (where it has died out)."""
         t0, t1 = self.residual_window
         mask = (self.t >= t0) & (self.t <= t1)
         if not np.any(mask):
             return 0.0
-        e = self.error[mask]
+        e = self.belt[mask]
         return float(np.max(np.abs(e - e[-1])))
 
     def contributions(self) -> dict:
         """The handover error by cause [m]: servo tracking and belt stretch at the instant of the
         largest error in the handover window (signed; they add up to it), encoder quantisation as a bound."""
-        w = self._window()
-        if np.any(w):
-            idx = np.flatnonzero(w)[np.argmax(np.abs(self.error[w]))]
-            servo, belt = float(self.servo[idx]), float(self.belt[idx])
-            belt_load = float(self.belt_load[idx])
-        else:
-            servo, belt, belt_load = (self.at_handover(a) for a in (self.servo, self.belt, self.belt_load))
+        servo, belt, belt_load = (self._worst(a) for a in (self.servo, self.belt, self.belt_load))
         return {"servo_tracking": servo, "belt_stretch": belt, "encoder_quantisation": self.quantisation,
                 "belt_stretch_inertia": belt - belt_load, "belt_stretch_forces": belt_load}
 
@@ -761,9 +776,10 @@ def plot_accuracy(result: AccuracyResult, path: str | Path | None = None):
     ax.plot(ang, result.belt * 1e3, lw=1.0, label="belt stretch")
     ax.set_ylabel("error [mm]")
     ax.legend(loc="best", fontsize=8)
-    h_ang = 360.0 * result.handover_time / result.period
+    h_ang = 360.0 * (result.handover_time - result.loop.settings.sum_small_time_constants) / result.period
     for a in axes:
         a.axvline(h_ang, color="tab:red", ls="--", lw=1)
+        a.axvspan(h_ang, h_ang + result.loop.settings.handover_window, color="tab:red", alpha=0.08, lw=0)
         a.grid(True, alpha=0.3)
     axes[1].annotate(f"handover: {result.handover_error * 1e3:.3f} mm", (h_ang, result.at_handover(result.error) * 1e3),
                      xytext=(10, 10), textcoords="offset points", color="tab:red")
@@ -835,13 +851,13 @@ def accuracy_text(report: dict) -> str:
         f"handover error (largest over {report['handover_window_deg']:g} deg after the end of the handover move at "
         f"{report['handover_angle_deg']:.1f} deg): {report['handover_error_mm']:.4f} mm "
         f"(requirement {report['requirement_mm']:g} mm)",
-        f"  servo tracking        {c['servo_tracking']:.4f} mm  (pulley {report['pulley_error_at_handover_deg']:.3f} deg)",
-        f"  belt stretch          {c['belt_stretch']:.4f} mm  (inertia {sc['belt_stretch_inertia']:+.4f}, "
+        f"  servo tracking        {sc['servo_tracking']:+.4f} mm  (pulley {report['pulley_error_at_handover_deg']:.3f} deg)",
+        f"  belt stretch          {sc['belt_stretch']:+.4f} mm  (inertia {sc['belt_stretch_inertia']:+.4f}, "
         f"forces {sc['belt_stretch_forces']:+.4f})",
-        f"  encoder quantisation  {c['encoder_quantisation']:.4f} mm  (one count)",
+        f"  encoder quantisation  {c['encoder_quantisation']:.4f} mm  (one count, added as a bound)",
         f"over the cycle: max error {report['max_error_mm']:.4f} mm, max servo error "
         f"{report['max_servo_error_mm']:.4f} mm, max belt stretch {report['max_belt_stretch_mm']:.4f} mm; "
-        f"residual vibration in the dwell after the handover {report['residual_vibration_mm']:.4f} mm",
+        f"residual belt vibration in the dwell after the handover {report['residual_vibration_mm']:.4f} mm",
         f"peak torque command {report['peak_torque_command_N_m']:.3f} N m (limit {report['torque_limit_N_m']:.2f} N m)",
     ]
     if report["torque_limited"]:
@@ -849,7 +865,7 @@ def accuracy_text(report: dict) -> str:
                      "above does not hold")
     if "laws" in report:
         lines += ["", format_table(report["laws"], [
-            ("law", "law"), ("handover_error_mm", "handover mm"), ("residual_vibration_mm", "residual vib. mm"),
+            ("law", "law"), ("handover_error_mm", "handover mm"), ("residual_vibration_mm", "residual belt vib. mm"),
             ("max_error_mm", "max error mm"), ("max_belt_stretch_mm", "max belt mm"),
             ("peak_torque_command_N_m", "peak torque N m"), ("torque_limited", "saturates")],
             title=f"Motion laws at {report['spm']:g} spm on the same drive")]

@@ -1,0 +1,84 @@
+"""`strokeopt accuracy` (and its bad input), as a user and a script see it."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from strokeopt.cli import build_parser, main
+
+
+def test_accuracy_json_and_plot(capsys, reference_path, tmp_path):
+    fig = tmp_path / "acc.png"
+    assert main(["accuracy", str(reference_path), "--spm", "600", "--json", "--plot", str(fig)]) == 0
+    out, err = capsys.readouterr()
+    data = json.loads(out)  # stdout is only JSON
+    assert data["spm"] == 600
+    assert set(data["contributions_mm"]) == {"servo_tracking", "belt_stretch", "encoder_quantisation"}
+    # digest A.5: measured 0.076 mm at 600 spm; the same order is predicted
+    assert 0.02 <= data["handover_error_mm"] <= 0.3
+    assert data["motor"] == "055U2B30" and data["torque_limited"] is False
+    assert fig.stat().st_size > 10_000 and str(fig) in err
+
+
+def test_accuracy_text_with_law_comparison(capsys, reference_path):
+    assert main(["accuracy", str(reference_path), "--compare-laws", "--plot", "none"]) == 0
+    out = capsys.readouterr().out
+    assert "handover error" in out and "servo tracking" in out and "belt stretch" in out
+    assert "encoder quantisation" in out and "symmetric optimum" in out
+    for law in ("parabolic", "cubic", "cosine", "modified_sine", "sine", "poly5", "poly7"):
+        assert law in out
+
+
+def test_accuracy_law_option(capsys, reference_path):
+    assert main(["accuracy", str(reference_path), "--law", "poly7", "--json", "--plot", "none"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["label"] == "poly7" and data["handover_error_mm"] > 0
+
+
+def test_help_teaches(capsys):
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(["accuracy", "--help"])
+    text = capsys.readouterr().out
+    assert "servo tracking" in text and "Example: strokeopt accuracy" in text
+
+
+@pytest.mark.parametrize("edit, field, words", [
+    (lambda t: t.replace('tuning = "symmetric_optimum"', 'tuning = "manual"\nposition_gain_1_s = 0\n'
+                         'speed_gain_N_m_s_rad = 0.01\nspeed_integral_time_ms = 10'),
+     "servo.position_gain_1_s", "positive"),
+    (lambda t: t.replace('tuning = "symmetric_optimum"', 'tuning = "manual"\nposition_gain_1_s = 50\n'
+                         'speed_gain_N_m_s_rad = -0.01\nspeed_integral_time_ms = 10'),
+     "servo.speed_gain_N_m_s_rad", "positive"),
+    (lambda t: t.replace('tuning = "symmetric_optimum"', 'tuning = "manual"\nposition_gain_1_s = 50'),
+     "servo.speed_gain_N_m_s_rad", "required"),
+    (lambda t: t.replace("position_sampling_us = 250 ", "position_sampling_us = 20000 "),
+     "servo.position_sampling_us", "shortest move"),
+    (lambda t: t.replace("control_cycle_us = 500 ", "control_cycle_us = 15000 "),
+     "servo.control_cycle_us", "shortest move"),
+    (lambda t: t.replace("belt_span_mm = 139.5 ", "belt_span_mm = 0 "), "servo.belt_span_mm", "positive"),
+    (lambda t: t.replace("belt_damping_ratio = 0.05", "belt_damping_ration = 0.05"),
+     "servo.belt_damping_ration", "did you mean"),
+    (lambda t: t.replace('tuning = "symmetric_optimum"', 'tuning = "symmetric_optimum"\nposition_gain_1_s = 80'),
+     "servo.position_gain_1_s", "only used with"),
+])
+def test_bad_servo_input_exits_2(capsys, write_problem, edit, field, words):
+    path = write_problem(edit)
+    assert main(["accuracy", str(path), "--plot", "none"]) == 2
+    err = capsys.readouterr().err
+    assert str(path) in err and field in err and words in err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_bad_gain_from_the_command_line_exits_2(capsys, reference_path):
+    assert main(["accuracy", str(reference_path), "--set", "servo.speed_bandwidth_Hz=-5", "--plot", "none"]) == 2
+    err = capsys.readouterr().err
+    assert "servo.speed_bandwidth_Hz" in err and "(value from --set)" in err
+
+
+def test_sampling_longer_than_the_move_at_a_higher_spm(capsys, write_problem):
+    # 5 ms sampling is shorter than every move at 500 spm (move 3: 9.6 ms) but not at 1200 spm
+    path = write_problem(lambda t: t.replace("position_sampling_us = 250 ", "position_sampling_us = 5000 "))
+    assert main(["accuracy", str(path), "--spm", "1200", "--plot", "none"]) == 2
+    assert "servo.position_sampling_us" in capsys.readouterr().err
