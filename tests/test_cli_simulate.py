@@ -57,8 +57,8 @@ def test_tolerance_study(capsys, reference_path, tmp_path):
     fig = tmp_path / "tol.png"
     assert main(["simulate", str(reference_path), "--spm", "600", "--study", "tolerance", "--json", "--plot", str(fig)]) == 0
     data = json.loads(capsys.readouterr().out)
-    methods = {(r["method"], r["smoothing_mm"] > 0) for r in data["rows"]}
-    assert methods == {("cvodes", False), ("idas", False), ("cvodes", True)}
+    methods = {(r["method"], r["switching"]) for r in data["rows"]}
+    assert methods == {("cvodes", "hard"), ("idas", "hard"), ("cvodes", "smoothed"), ("cvodes", "restarts")}
     hard = [r for r in data["rows"] if r["method"] == "cvodes" and r["smoothing_mm"] == 0]
     assert hard[-1]["impact_velocity_error_m_s"] < hard[0]["impact_velocity_error_m_s"]
     assert fig.stat().st_size > 10_000

@@ -166,13 +166,14 @@ class SceneODE:
             vel[b] = z[n + i]
         force_on = {b: ca.SX(0) for b in scene.bodies}
         force_on[FRAME] = ca.SX(0)
-        forces = []
+        forces, switches = [], []
         eps = smoothing
         for el in scene.element_objects:
             a_, b_ = el.bodies
             if el.kind == "grip":
                 c = pos[a_] - pos[b_]
                 cond = pos[el.acts_while[0]] - pos[el.acts_while[1]] + el.acts_while[2]
+                switches.append(cond)
                 active = el.elastic_force(c) + el.damping * (vel[a_] - vel[b_])
                 if eps > 0:
                     f = _sigmoid(cond / eps) * active
@@ -181,6 +182,7 @@ class SceneODE:
             else:
                 c = pos[a_] - pos[b_] + el.offset
                 cd = vel[a_] - vel[b_]
+                switches.append(c)
                 if eps > 0:
                     f = el.elastic_force(eps * _softplus(c / eps)) + _sigmoid(c / eps) * el.damping * cd
                 else:
@@ -203,6 +205,9 @@ class SceneODE:
             [t0 + tau, xd, vd, ad, acc, ca.vertcat(*forces) if forces else ca.SX(0, 1), drive],
             ["sigma", "z", "p"], ["t", "x_d", "v_d", "a_d", "acc", "forces", "drive"])
         self.rhs = ca.Function("scene_rhs", [sigma, z, p], [ode], ["sigma", "z", "p"], ["ode"])
+        # the switching functions (an element acts while its value is >= 0), one per element
+        self.switches = ca.Function("scene_switches", [sigma, z, p],
+                                    [ca.vertcat(*switches) if switches else ca.SX(0, 1)], ["sigma", "z", "p"], ["sw"])
 
     @property
     def state_size(self) -> int:
