@@ -287,7 +287,11 @@ def cmd_simulate(args) -> int:
         else:
             print(format_table(rows, SWEEP_COLUMNS, title=f"{problem.name}: scene {scene!r}, speed sweep "
                                                           f"(interval times {problem.timing.interval_times})"))
-            print("\nthe follower lags from " + (f"{onset:g} spm" if onset is not None else "no speed of the sweep"))
+            if onset is None:
+                print("\nthe follower lags at no speed of the sweep")
+            else:
+                print(f"\nthe follower lags from {onset:g} spm" + (" (the first speed of the sweep: start lower to "
+                                                                   "find the onset)" if onset == rows[0]["spm"] else ""))
         _write_figure(lambda p: plot_sweep(rows, p), _plot_path(args, f"sweep_{scene}"), args)
         return 0
     result = simulate_scene(problem, scene, problem.spm, options=options)

@@ -10,8 +10,9 @@ drive forces, and the needle-handover results of digest A.6:
 * lag = x_driven - x_follower > 1 um, starting before the impact (after it the stop holds the
   follower back); it lasts until the first time after its onset that x_follower' catches up
   with x_driven';
-* remaining gap N = N - (x3 - x2), its minimum before the impact; premature release = gap N
-  closed (remaining gap <= 0) before the impact;
+* remaining gap N = N - (x3 - x2), its minimum before the impact (on the output grid);
+  premature release = gap N closed (remaining gap < 1 um) before the impact, or the needle
+  released before the impact (the gap then closed between output points);
 * release: the first time the grip's condition ends (x1 - x3 > M).
 
 The source does not state these definitions exactly; these are ours. Events are
@@ -84,6 +85,7 @@ import numpy as np
 from .errors import ProblemError, SolverError
 
 LAG_THRESHOLD = 1e-6  # m: x_driven - x_follower above this is a lag (contacts deflect ~1e-8 m)
+GAP_CLOSED = 1e-6  # m: a remaining gap N below this is closed
 METHODS = ("cvodes", "idas")
 
 
@@ -477,6 +479,7 @@ def scene_metrics(r: SceneResult, sc, refine=None) -> dict:
          "lag_end_angle_deg": None, "max_lag_mm": None, "gap_N_mm": None, "min_gap_N_mm": None,
          "release_angle_deg": None, "premature_release": None, "peak_pad_force_N": None}
     t_imp = None
+    closed_before_impact = False
     els = model.elements
     if roles.impact and roles.impact in sc.elements:
         el = els[roles.impact]
@@ -509,7 +512,7 @@ def scene_metrics(r: SceneResult, sc, refine=None) -> dict:
         r.remaining_gap = remaining
         before = remaining if t_imp is None else remaining[t <= t_imp]
         m["min_gap_N_mm"] = float(np.min(before)) * 1e3
-        m["premature_release"] = bool(np.min(before) <= 0.0) if t_imp is not None else None
+        closed_before_impact = bool(np.min(before) < GAP_CLOSED)
     if roles.release:
         el = els[roles.release]
         p, q, off = el.acts_while
@@ -517,6 +520,10 @@ def scene_metrics(r: SceneResult, sc, refine=None) -> dict:
             rel = _event(r, lambda S: -(px(S, p) - px(S, q) + off), lambda S: -(pv(S, p) - pv(S, q)), refine)
             if rel is not None:
                 m["release_angle_deg"] = rel[0] * deg
+                if t_imp is not None and rel[0] < t_imp:
+                    closed_before_impact = True  # released before the impact: the gap closed between output points
+    if m["gap_N_mm"] is not None and t_imp is not None:
+        m["premature_release"] = closed_before_impact
     m["peak_drive_force_N"] = float(np.max(np.abs(r.drive_force)))
     m["peak_contact_forces_N"] = {e: float(np.max(np.abs(fv))) for e, fv in r.forces.items()}
     return m
