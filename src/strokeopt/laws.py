@@ -195,13 +195,39 @@ class MotionLaw:
 
 @cache
 def _characteristics(law: MotionLaw) -> Characteristics:
-    x = np.linspace(0.0, 1.0, 200_001)
-    _, y1, y2, y3, _ = law.derivatives(x, order=4)
-    c_v, c_a, c_j = (float(np.max(np.abs(d))) for d in (y1, y2, y3))
+    c_v, c_a, c_j = (_peak(law, k) for k in (1, 2, 3))
     continuity = _continuity(law)
     if continuity < 2:
         c_j = math.inf
     return Characteristics(C_v=c_v, C_a=c_a, C_j=c_j, continuity=continuity)
+
+
+def _peak(law: MotionLaw, order: int, samples: int = 4001) -> float:
+    """max |y^(order)| on [0, 1]: a grid that includes the law's joints (one side each),
+    then a golden-section refinement around the best grid point."""
+    tiny = 1e-12
+    joints = [b + d for b in law.breaks for d in (-tiny, tiny)]
+    x = np.unique(np.concatenate([np.linspace(0.0, 1.0, samples), joints]))
+    values = np.abs(law.derivatives(x, order)[order])
+    i = int(np.argmax(values))
+    best = float(values[i])
+    if 0 < i < len(x) - 1:
+        lo, hi = x[i - 1], x[i + 1]
+        f = lambda z: abs(float(law.derivatives([z], order)[order][0]))  # noqa: E731
+        ratio = (math.sqrt(5) - 1) / 2
+        a, b = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
+        fa, fb = f(a), f(b)
+        for _ in range(60):
+            if fa > fb:
+                hi, b, fb = b, a, fa
+                a = hi - ratio * (hi - lo)
+                fa = f(a)
+            else:
+                lo, a, fa = a, b, fb
+                b = lo + ratio * (hi - lo)
+                fb = f(b)
+        best = max(best, fa, fb)
+    return best
 
 
 def _continuity(law: MotionLaw, delta: float = 1e-9) -> int:
