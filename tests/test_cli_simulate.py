@@ -94,6 +94,7 @@ def test_bad_problem_file_exit_2(capsys, write_problem, edit, words):
     assert words in err and "Traceback" not in err
 
 
+@pytest.mark.slow  # solves a design first (collocation, seconds to tens of seconds)
 def test_verify_design(capsys, reference_path, tmp_path):
     from strokeopt import load_problem
     from strokeopt.design import solve_design
