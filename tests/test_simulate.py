@@ -242,3 +242,16 @@ def test_restarts_at_switches_agree(problem, release):
     assert abs(m["impact_angle_deg"] - ref["impact_angle_deg"]) < 0.01
     assert abs(m["release_angle_deg"] - ref["release_angle_deg"]) < 0.05
     assert np.all(np.diff(r.t) >= 0)
+
+
+def test_scene_of_the_driven_body_alone(problem):
+    # no state at all: the drive force is the shell's inertia force m a (digest A.6: 81.7 g)
+    from dataclasses import replace
+
+    from strokeopt import make_scene
+
+    only = replace(problem, scenes={"shell": make_scene(problem.model, "shell", ["shell"], [])})
+    r = simulate_scene(only, "shell", 600)
+    assert r.stats["nsteps"] == 0 and r.metrics["impact_velocity_m_s"] is None
+    a_max = max(np.max(np.abs(problem.stroke(600).sample(20001).a)), 1.0)
+    assert r.metrics["peak_drive_force_N"] == pytest.approx(81.7e-3 * a_max, rel=1e-3)

@@ -218,7 +218,10 @@ def simulate_scene(problem, scene: str, spm: float | None = None, stroke=None,
     ode = sc.build(stroke, sign, s_ref, opts.smoothing)
     spans = [p.duration for p in stroke.pieces]
     n_out = int(min(max(math.ceil(max(spans) / period * 360.0 / opts.resolution_deg), 20), 4000))
-    integ, grid = _integrator(ode, opts, n_out)
+    if ode.state_size:
+        integ, grid = _integrator(ode, opts, n_out)
+    else:  # only the driven body: nothing to integrate
+        integ, grid = None, np.linspace(0.0, 1.0, n_out + 1)
 
     def advance(k, piece, z, pk):
         try:
@@ -487,7 +490,7 @@ def scene_metrics(r: SceneResult, sc, refine=None) -> dict:
         hit = _event(r, lambda S: px(S, ba) - px(S, bb) + el.offset, lambda S: pv(S, ba) - pv(S, bb), refine)
         if hit is not None:
             t_imp, S, i = hit
-            m["impact_angle_deg"] = t_imp * deg
+            m["impact_angle_deg"] = float(t_imp * deg)
             m["impact_velocity_m_s"] = _linear(S.t, S.velocities[ba], t_imp, i)
         m["peak_pad_force_N"] = float(np.max(np.abs(r.forces[roles.impact])))
     f = roles.follower
@@ -499,11 +502,11 @@ def scene_metrics(r: SceneResult, sc, refine=None) -> dict:
                        lambda S: S.velocities[d] - S.velocities[f], refine)
         if onset is not None and (t_imp is None or onset[0] < t_imp):  # after the impact the stop holds it back
             m["lag"] = True
-            m["lag_onset_angle_deg"] = onset[0] * deg
+            m["lag_onset_angle_deg"] = float(onset[0] * deg)
             end = _event(r, lambda S: S.velocities[f] - S.velocities[d],
                          lambda S: S.accelerations[f] - S.accelerations[d], refine, start=onset[0])
             if end is not None:
-                m["lag_end_angle_deg"] = end[0] * deg
+                m["lag_end_angle_deg"] = float(end[0] * deg)
     if roles.gap and roles.gap in sc.elements:
         el = els[roles.gap]
         ba, bb = el.bodies
@@ -519,7 +522,7 @@ def scene_metrics(r: SceneResult, sc, refine=None) -> dict:
         if p in sc.bodies and q in sc.bodies:  # a condition between bodies of the scene, even if the grip is not built
             rel = _event(r, lambda S: -(px(S, p) - px(S, q) + off), lambda S: -(pv(S, p) - pv(S, q)), refine)
             if rel is not None:
-                m["release_angle_deg"] = rel[0] * deg
+                m["release_angle_deg"] = float(rel[0] * deg)
                 if t_imp is not None and rel[0] < t_imp:
                     closed_before_impact = True  # released before the impact: the gap closed between output points
     if m["gap_N_mm"] is not None and t_imp is not None:
