@@ -251,8 +251,9 @@ def _report_scene(args, problem, scene, result, extra=None) -> None:
 
 def cmd_simulate(args) -> int:
     from .report import format_table, to_json
-    from .simulate import (STUDY_COLUMNS, SWEEP_COLUMNS, lag_onset_spm, parse_spm_range, plot_sweep,
-                           plot_tolerance_study, simulate_scene, sweep_spm, tolerance_study)
+    from .plots import plot_sweep, plot_tolerance_study
+    from .simulate import (STUDY_COLUMNS, SWEEP_COLUMNS, lag_onset_spm, parse_spm_range, simulate_scene, sweep_spm,
+                           tolerance_study)
 
     spms = parse_spm_range(args.spm) if args.spm is not None else None
     if spms is not None:

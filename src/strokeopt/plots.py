@@ -103,3 +103,107 @@ def plot_sizing(sizing, candidate=None, path=None):
         fig.savefig(path, dpi=110)
         plt.close(fig)
     return fig
+
+
+
+def plot_scene(r, path=None):
+    """Driven and follower velocities and the remaining gap N over the cam angle; impact and release marked."""
+    ang = r.angle_deg
+    m = r.metrics
+    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(9, 8), constrained_layout=True)
+    ax = axes[0]
+    for b in r.velocities:
+        ax.plot(ang, r.velocities[b], lw=1.2 if b == r.driven else 1.0, label=b + (" (driven)" if b == r.driven else ""))
+    ax.set_ylabel("velocity [m/s]")
+    ax.legend(fontsize=8, loc="best")
+    ax = axes[1]
+    for b in r.positions:
+        ax.plot(ang, r.positions[b] * 1e3, lw=1.0, label=b)
+    ax.set_ylabel("position [mm]\n(toward handover)")
+    ax = axes[2]
+    if r.remaining_gap is not None:
+        ax.plot(ang, r.remaining_gap * 1e3, color="tab:purple", label=f"remaining gap N (N = {m['gap_N_mm']:g} mm)")
+        ax.axhline(0, color="0.5", lw=0.6)
+        ax.set_ylabel("remaining gap N [mm]")
+    else:
+        ax.plot(ang, r.drive_force, color="tab:gray", label="drive force")
+        ax.set_ylabel("drive force [N]")
+    ax.legend(fontsize=8, loc="best")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+        for key, color, text in (("impact_angle_deg", "tab:red", "impact"), ("release_angle_deg", "tab:green", "release"),
+                                 ("lag_end_angle_deg", "tab:orange", "lag end")):
+            if m.get(key) is not None:
+                ax.axvline(m[key], color=color, ls="--", lw=1)
+    for row, (key, color, text) in enumerate((("lag_end_angle_deg", "tab:orange", "lag end"),
+                                              ("impact_angle_deg", "tab:red", "impact"),
+                                              ("release_angle_deg", "tab:green", "release"))):
+        if m.get(key) is not None:
+            axes[0].annotate(f"{text} {m[key]:.1f} deg", (m[key], 1.0), xycoords=("data", "axes fraction"),
+                             xytext=(3, -12 - 11 * row), textcoords="offset points", color=color, fontsize=8)
+    lo = m.get("lag_onset_angle_deg") or 0.0
+    axes[-1].set_xlim(max(0.0, min(lo, 20.0) - 5), 90.0)
+    axes[-1].set_xlabel("cam angle [deg]")
+    iv = m.get("impact_velocity_m_s")
+    axes[0].set_title(f"scene {r.scene} at {r.spm:g} spm: impact "
+                      + (f"{iv:.2f} m/s" if iv is not None else "none"))
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig
+
+
+def plot_sweep(rows: list[dict], path=None):
+    """Impact velocity and min remaining gap N vs spm."""
+    spm = [r["spm"] for r in rows]
+    fig, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 6), constrained_layout=True)
+    axes[0].plot(spm, [np.nan if r["impact_velocity_m_s"] is None else r["impact_velocity_m_s"] for r in rows], "o-", ms=3)
+    axes[0].set_ylabel("impact velocity [m/s]")
+    axes[1].plot(spm, [np.nan if r["min_gap_N_mm"] is None else r["min_gap_N_mm"] for r in rows], "o-", ms=3,
+                 color="tab:purple")
+    axes[1].set_ylabel("min remaining gap N [mm]")
+    from .simulate import lag_onset_spm
+
+    onset = lag_onset_spm(rows)
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+        if onset is not None:
+            ax.axvline(onset, color="tab:orange", ls="--", lw=1)
+    if onset is not None:
+        axes[0].annotate(f"lag from {onset:g} spm", (onset, 0.05), xycoords=("data", "axes fraction"),
+                         xytext=(4, 0), textcoords="offset points", color="tab:orange")
+    axes[1].set_xlabel("speed [spm]")
+    axes[0].set_title(f"scene {rows[0]['scene']}: speed sweep" if rows else "speed sweep")
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig
+
+
+def plot_tolerance_study(study: dict, path=None):
+    """Work-precision: error of impact velocity and release angle vs CPU time."""
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
+    groups = {}
+    for r in study["rows"]:
+        if "failed" in r:
+            continue
+        groups.setdefault((r["method"], r["switching"], r["smoothing_mm"]), []).append(r)
+    for (mth, switching, eps), rows in groups.items():
+        label = f"{mth}, " + {"hard": "hard switches", "restarts": "restarts at switches"}.get(
+            switching, f"smoothing {eps:g} mm")
+        cpu = [r["cpu_time_s"] for r in rows]
+        for ax, key in zip(axes, ("impact_velocity_error_m_s", "release_angle_error_deg")):
+            ax.loglog(cpu, [max(r[key], 1e-12) if r[key] is not None else np.nan for r in rows], "o-", label=label)
+    axes[0].set_ylabel("impact velocity error [m/s]")
+    axes[1].set_ylabel("release angle error [deg]")
+    for ax in axes:
+        ax.set_xlabel("CPU time [s]")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].axhline(1e-3, color="0.5", ls=":", lw=1)
+    axes[1].axhline(0.1, color="0.5", ls=":", lw=1)
+    axes[0].legend(fontsize=8)
+    fig.suptitle(f"work-precision, scene {study['scene']} at {study['spm']:g} spm")
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig
