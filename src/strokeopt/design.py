@@ -66,6 +66,7 @@ from .collocation import Mesh, MoveSolution, MoveVariables, fine_grid, node_time
 from .errors import ProblemError, SolverError
 from .laws import make_law
 from .stroke import Piece, StrokeFunction, dwell_piece
+from .transmission import BeltPulley, Transmission
 
 #: Objectives that need only the kinematics.
 KINEMATIC_OBJECTIVES = ("min_peak_accel", "min_accel_squared", "min_jerk", "min_snap")
@@ -82,7 +83,7 @@ OBJECTIVES = {
     "min_snap": "integral of snap (4th derivative) squared over the moves",
 }
 MOTOR_CHOICES = ("fixed", "enumerate", "bonmin")
-PULLEY_CHOICES = ("fixed", "optimise")
+PULLEY_CHOICES = ("fixed", "optimise", "continuous")
 
 #: Default IPOPT options (plain dict, passed through to CasADi's nlpsol).
 DEFAULT_SOLVER_OPTIONS = {
@@ -129,6 +130,9 @@ class DesignSettings:
     check_points: int = 20
     check_tolerance: float = 0.005
     refinements: int = 2
+    include_pulley_inertia: bool = True
+    belt_tensile_stiffness: float | None = None
+    belt_span: float | None = None
     solver_options: dict = field(default_factory=dict)
 
     @property
@@ -162,6 +166,13 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
     check_points = f.number("check_points", 20, integer=True, min=2, max=1000)
     check_tol = f.number("check_tolerance", 0.005, positive=True)
     refinements = f.number("refinements", 2, integer=True, min=0, max=6)
+    pulley_inertia = f.boolean("include_pulley_inertia", True)
+    stiffness = f.number("belt_tensile_stiffness_N", None, positive=True)
+    span = f.number("belt_span_mm", None, positive=True)
+    if (stiffness is None) != (span is None):
+        missing = "belt_span_mm" if span is None else "belt_tensile_stiffness_N"
+        raise f.error(missing, "is needed too: the static belt deflection at the handover uses both "
+                               "belt_tensile_stiffness_N and belt_span_mm")
     solver = f.table("solver", required=False)
     options = {}
     if solver is not None:
@@ -173,7 +184,8 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
         solver.finish()
     f.finish()
     return DesignSettings(objective, n, d, rest, jerk, from_law, accuracy, motor_choice, pulley, zmin, zmax,
-                          check_points, check_tol, refinements, options)
+                          check_points, check_tol, refinements, pulley_inertia, stiffness,
+                          None if span is None else span * 1e-3, options)
 
 
 # --------------------------------------------------------------------------- the NLP
@@ -221,15 +233,32 @@ def _moves(problem, spm: float, settings: DesignSettings) -> list[_Move]:
                                    f"the motion law {itv.law.label} of move {itv.move_index} has unbounded jerk; "
                                    "give jerk_max_m_s3 instead")
             bound = c_j * abs(itv.stroke) / dur**3
-        out.append(_Move(itv.move_index, itv.index, itv.name, float(t0), float(dur), itv.start_position,
-                         itv.stroke, bound))
+        out.append(_Move(itv.move_index, itv.index, itv.name,
+                         float(t0), float(dur), itv.start_position, itv.stroke, bound))
     return out
+
+
+@dataclass(frozen=True)
+class _Limit:
+    """A group of inequality constraints ``expr <= 0`` (scaled) with what it means in SI.
+
+    ``need(sigma)`` turns a relaxation ``expr <= sigma`` back into the SI value
+    the design would need; ``limit`` is the SI limit, ``what`` names it.
+    """
+
+    name: str
+    what: str
+    limit: float
+    unit: str
+    need: Any
+    move: int | None = None
 
 
 @dataclass
 class _Built:
     """Symbols and bookkeeping of one NLP."""
 
+    relaxed: bool = False
     w: list = field(default_factory=list)
     lbw: list = field(default_factory=list)
     ubw: list = field(default_factory=list)
@@ -237,13 +266,27 @@ class _Built:
     g: list = field(default_factory=list)
     lbg: list = field(default_factory=list)
     ubg: list = field(default_factory=list)
-    groups: list = field(default_factory=list)  # (name, slice in g, scale, limit description)
+    limits: list = field(default_factory=list)  # (_Limit, slack symbol or None)
+    limit_exprs: list = field(default_factory=list)  # the scaled expressions (<= 0) of the limit groups
+    offsets: dict = field(default_factory=dict)  # variable name -> (offset, size) in the decision vector
+    p: list = field(default_factory=list)  # parameters: numbers that change between solves of one structure
+    pvals: list = field(default_factory=list)
+    n_w: int = 0
     n_g: int = 0
+
+    def param(self, name: str, value: float) -> ca.MX:
+        """A number the NLP takes as a parameter (speed, part data), so one built solver serves many solves."""
+        sym = ca.MX.sym(name)
+        self.p.append(sym)
+        self.pvals.append(float(value))
+        return sym
 
     def var(self, name: str, shape, lb, ub, x0) -> ca.MX:
         """A matrix symbol; ``lb``, ``ub``, ``x0`` are scalars or arrays of ``shape``."""
         x = ca.MX.sym(name, *shape)
         self.w.append(ca.vec(x))
+        self.offsets[name] = (self.n_w, shape[0] * shape[1])
+        self.n_w += shape[0] * shape[1]
         for store, val in ((self.lbw, lb), (self.ubw, ub), (self.w0, x0)):
             arr = np.asarray(val, dtype=float)
             arr = np.broadcast_to(arr.reshape(shape) if arr.size == shape[0] * shape[1] else arr, shape)
@@ -258,8 +301,30 @@ class _Built:
         self.g.append(expr)
         self.lbg.append(np.broadcast_to(np.asarray(lb, dtype=float), (n,)).copy())
         self.ubg.append(np.broadcast_to(np.asarray(ub, dtype=float), (n,)).copy())
-        self.groups.append((name, slice(self.n_g, self.n_g + n)))
         self.n_g += n
+
+    def limit_abs(self, lim: _Limit, expr) -> None:
+        """``|expr| <= 1`` (scaled) as one two-sided row each; relaxed: ``|expr| <= 1 + sigma``."""
+        expr = ca.vec(expr)
+        self.limit_exprs.append(ca.fabs(expr) - 1.0)
+        if not self.relaxed:
+            self.constrain(lim.name, expr, -1.0, 1.0)
+            self.limits.append((lim, None))
+            return
+        slack = self.var(f"slack {lim.name}", (1, 1), 0.0, np.inf, 0.0)
+        self.constrain(lim.name, expr - slack, -np.inf, 1.0)
+        self.constrain(lim.name, expr + slack, -1.0, np.inf)
+        self.limits.append((lim, slack))
+
+    def limit(self, lim: _Limit, expr) -> None:
+        """``expr <= 0`` (scaled); in a relaxed build ``expr <= sigma``, ``sigma >= 0`` minimised."""
+        slack = None
+        self.limit_exprs.append(ca.vec(expr))
+        if self.relaxed:
+            slack = self.var(f"slack {lim.name}", (1, 1), 0.0, np.inf, 0.0)
+            expr = expr - slack
+        self.constrain(lim.name, expr, -np.inf, 0.0)
+        self.limits.append((lim, slack))
 
 
 def _initial_unit(mesh: Mesh, rest_order: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -267,10 +332,136 @@ def _initial_unit(mesh: Mesh, rest_order: int) -> tuple[np.ndarray, np.ndarray, 
     law = make_law("poly7" if rest_order >= 3 else "poly5")
     h = mesh.h
     starts = np.arange(mesh.intervals + 1) * h
-    y, y1, _ = law.derivatives(starts, order=2)[:3]
+    y, y1 = law.derivatives(starts, order=1)
     t_nodes = (np.arange(mesh.intervals).reshape(-1, 1) + mesh.nodes.reshape(1, -1)) * h
     a = law.derivatives(t_nodes.ravel(), order=2)[2].reshape(t_nodes.shape)
     return y, y1, a
+
+
+class _SizedBelt(Transmission):
+    """A belt pulley whose radius and inertia may be CasADi expressions (the radius as a decision variable).
+
+    The same ``x = r*phi`` as :class:`~strokeopt.transmission.BeltPulley`, for drive.py's
+    :func:`~strokeopt.drive.load_torque` to evaluate on the NLP's symbols.
+    """
+
+    name = "belt_pulley_sized"
+
+    def __init__(self, radius, inertia):
+        self.radius = radius
+        self.inertia = inertia
+
+    def position(self, phi):
+        return self.radius * phi
+
+    def inverse_position(self, x):
+        return x / self.radius
+
+    def motor_kinematics(self, x, v, a):
+        return x / self.radius, v / self.radius, a / self.radius
+
+    def symbolic_transfer(self, phi):
+        return self.radius * phi, self.radius + 0 * phi, 0 * phi
+
+
+@dataclass(frozen=True)
+class DriveChoice:
+    """The parts of one solve: a motor (or the candidates of a Bonmin choice) and a pulley.
+
+    ``teeth`` None means a continuous pulley radius between ``radius_bounds``.
+    """
+
+    motor: Any = None  # ServoMotor
+    teeth: int | None = None
+    radius_bounds: tuple[float, float] | None = None
+    candidates: tuple = ()  # motors for the Bonmin choice
+
+    @property
+    def label(self) -> str:
+        parts = []
+        if self.motor is not None:
+            parts.append(self.motor.name)
+        if self.candidates:
+            parts.append("one of " + ", ".join(m.name for m in self.candidates))
+        parts.append(f"{self.teeth} teeth" if self.teeth else "continuous radius")
+        return ", ".join(parts)
+
+
+class _DriveSetup:
+    """What the NLP needs of ``problem.drive``: catalogue, load, limits, belt."""
+
+    def __init__(self, problem, settings: DesignSettings):
+        spec = problem.drive
+        self.problem = problem
+        self.spec = spec
+        self.file = str(problem.file)
+        self.catalogue = spec.catalogue()
+        self.load = spec.load
+        self.limits = spec.limits
+        self.belt = spec.belt_spec(self.catalogue)
+        self.profile = spec.profile
+        self.settings = settings
+        zmin = settings.pulley_teeth_min if settings.pulley_teeth_min is not None else spec.teeth_min
+        zmax = settings.pulley_teeth_max if settings.pulley_teeth_max is not None else spec.teeth_max
+        self.teeth_range = (zmin, zmax)
+        if zmax < zmin:
+            raise ProblemError(self.file, "design.pulley_teeth_max", f"{zmax} is below pulley_teeth_min {zmin}")
+        #: torque scale of the NLP [N m]: the largest peak torque in the catalogue
+        self.tau_ref = max([m.peak_torque for m in self.catalogue.motors.values()] or [1.0])
+
+    def pulley(self, teeth: int):
+        found = self.catalogue.pulleys_of(self.profile, teeth, teeth)
+        if not found:
+            from .actuators import Pulley, pitch_diameter
+
+            pd = pitch_diameter(self.profile, teeth)
+            return Pulley(f"{self.profile}-{teeth}", self.profile, teeth, pd,
+                          float(self.catalogue.pulley_inertia(self.profile, pd)), "model")
+        return found[0]
+
+    def pulley_inertia(self, pitch_diameter):
+        if not self.settings.include_pulley_inertia:
+            return 0.0
+        return self.catalogue.pulley_inertia(self.profile, pitch_diameter)
+
+    def motors(self) -> list:
+        return list(self.catalogue.motors.values())
+
+    def fixed_motor(self):
+        if self.spec.motor is None:
+            raise ProblemError(self.file, "drive.motor", "is needed with design.motor_choice = \"fixed\" "
+                                                         "(or choose: motor_choice = \"enumerate\" or \"bonmin\")")
+        return self.catalogue.motor(self.spec.motor, (self.file, "drive.motor"))
+
+    def radius_bounds(self) -> tuple[float, float]:
+        from .actuators import pitch_diameter
+
+        return pitch_diameter(self.profile, self.teeth_range[0]) / 2, pitch_diameter(self.profile, self.teeth_range[1]) / 2
+
+    def transmission(self, teeth: int):
+        p = self.pulley(teeth)
+        return BeltPulley(p.pitch_diameter, inertia=p.inertia if self.settings.include_pulley_inertia else 0.0)
+
+    def allowable_belt_force(self, teeth: int | None) -> float | None:
+        """Largest effective belt tension [N] the belt checks accept (width and breaking, thesis appendix 2)."""
+        if self.belt is None:
+            return None
+        from .drive import belt_load
+
+        grooves = teeth if teeth is not None else self.teeth_range[0]  # conservative for a continuous radius
+        unit = belt_load(1.0, grooves, self.belt)  # everything is linear in the tension
+        width = self.belt.belt.width_factor / unit.required_width_factor
+        breaking = self.belt.belt.breaking_tension[self.belt.cord] / unit.breaking_load
+        return min(width, breaking)
+
+    def handover_force(self) -> float:
+        """|Effective belt tension| [N] at rest at the handover position (gravity and load forces)."""
+        from .drive import load_torque
+
+        move = self.problem.timing.handover_move
+        s = np.array([move.end_position if move is not None else 0.0])
+        terms = load_torque(1e-5, BeltPulley(0.02), self.load, s, np.zeros(1), np.zeros(1))
+        return float(abs(np.asarray(terms.load_force).ravel()[0]))
 
 
 @dataclass
@@ -283,60 +474,324 @@ class _Context:
     moves: list
     vars: list  # MoveVariables per move
     built: _Built
+    drive: _DriveSetup | None = None
+    choice: DriveChoice | None = None
     extra: dict = field(default_factory=dict)
+    T: list = field(default_factory=list)  # move durations (parameters)
 
-    def si_nodes(self, m: int, kind: str) -> ca.MX:
-        """Values at every node (N x (d+1)) of move ``m`` in SI units: s [m], v, a, j."""
+    def si(self, m: int, theta, kind: str) -> ca.MX:
+        """Values of move ``m`` at local points ``theta`` of every interval (N x len(theta)) in SI units."""
         mv, x = self.moves[m], self.vars[m]
-        unit = x.at(self.mesh.nodes, kind)
+        unit = x.at(theta, kind)
         if kind == "s":
             return mv.start + mv.stroke * unit
-        return unit * (mv.stroke / mv.duration ** {"v": 1, "a": 2, "j": 3}[kind])
+        return unit * (mv.stroke / self.T[m] ** {"v": 1, "a": 2, "j": 3}[kind])
 
 
-def _build(problem, spm: float, settings: DesignSettings, mesh: Mesh, objective: str, warm: list | None):
+def _add_moves(b: _Built, problem, spm, settings, mesh, objective, warm) -> tuple[list, list, list]:
     moves = _moves(problem, spm, settings)
-    b = _Built()
     xs = []
+    durations = [b.param(f"T{mv.index}", mv.duration) for mv in moves]
     n, d = mesh.intervals, mesh.degree
     for k, mv in enumerate(moves):
         if warm is not None and k < len(warm) and warm[k].mesh == mesh:
             y0, v0, A = warm[k].S, warm[k].V, warm[k].A
-            a_init = A[:, 1:]
-            a0_init = A[0, 0]
+            a_init, a0_init = A[:, 1:], A[0, 0]
         else:
             y0, v0, a_nodes = _initial_unit(mesh, settings.rest_order)
             a_init, a0_init = a_nodes[:, 1:], a_nodes[0, 0]
-        s_lb = np.full(n + 1, -np.inf)
-        s_ub = np.full(n + 1, np.inf)
+        s_lb, s_ub = np.full(n + 1, -np.inf), np.full(n + 1, np.inf)
         s_lb[0] = s_ub[0] = 0.0
         s_lb[-1] = s_ub[-1] = 1.0  # the end position is met exactly (the handover, for the handover move)
-        v_lb = np.full(n + 1, -np.inf)
-        v_ub = np.full(n + 1, np.inf)
+        v_lb, v_ub = np.full(n + 1, -np.inf), np.full(n + 1, np.inf)
         v_lb[[0, -1]] = v_ub[[0, -1]] = 0.0
         S = b.var(f"S{mv.index}", (n + 1, 1), s_lb, s_ub, y0)
         V = b.var(f"V{mv.index}", (n + 1, 1), v_lb, v_ub, v0)
-        rest = 0.0 if settings.rest_order >= 2 else None
-        a0 = b.var(f"a0_{mv.index}", (1, 1), -np.inf if rest is None else 0.0, np.inf if rest is None else 0.0,
-                   0.0 if rest is not None else a0_init)
-        a_lb = np.full((n, d), -np.inf)
-        a_ub = np.full((n, d), np.inf)
-        if rest is not None:
+        rest = settings.rest_order >= 2
+        a0 = b.var(f"a0_{mv.index}", (1, 1), 0.0 if rest else -np.inf, 0.0 if rest else np.inf,
+                   0.0 if rest else a0_init)
+        a_lb, a_ub = np.full((n, d), -np.inf), np.full((n, d), np.inf)
+        if rest:
             a_lb[-1, -1] = a_ub[-1, -1] = 0.0
         Acol = b.var(f"A{mv.index}", (n, d), a_lb, a_ub, a_init)
-        xs.append(MoveVariables(mesh, S, V, a0, Acol))
-        b.constrain(f"move {mv.index} collocation", xs[-1].defects(), 0.0, 0.0)
+        x = MoveVariables(mesh, S, V, a0, Acol)
+        xs.append(x)
+        b.constrain(f"move {mv.index} collocation", x.defects(), 0.0, 0.0)
         if settings.rest_order >= 3:
-            j_ends = ca.vertcat(xs[-1].at([0.0], "j")[0, 0], xs[-1].at([1.0], "j")[-1, 0])
-            b.constrain(f"move {mv.index} rest (jerk)", j_ends, 0.0, 0.0)
+            b.constrain(f"move {mv.index} rest (jerk)", ca.vertcat(x.at([0.0], "j")[0, 0], x.at([1.0], "j")[-1, 0]),
+                        0.0, 0.0)
         if settings.rest_order >= 3 or objective == "min_snap":
-            b.constrain(f"move {mv.index} jerk continuity", xs[-1].jerk_joints(), 0.0, 0.0)
+            b.constrain(f"move {mv.index} jerk continuity", x.jerk_joints(), 0.0, 0.0)
         if mv.jerk_bound is not None:
-            jb = mv.jerk_bound / mv.j_scale  # bound on the unit jerk
-            b.constrain(f"jerk bound move {mv.index}", xs[-1].hull("j") / jb, -1.0, 1.0)
-    ctx = _Context(problem, settings, mesh, moves, xs, b)
+            jb = b.param(f"jerk bound {mv.index}", mv.jerk_bound / mv.j_scale)  # bound on the unit jerk
+            hull = x.hull("j") / jb  # Bernstein coefficients: bounds the jerk everywhere, not only at nodes
+            lim = _Limit(f"jerk bound move {mv.index}", "jerk bound", mv.jerk_bound, "m/s^3",
+                         lambda sig, jb=mv.jerk_bound: jb * (1 + sig), mv.index)
+            b.limit_abs(lim, hull)
+    return moves, xs, durations
+
+
+def _build(problem, spm: float, settings: DesignSettings, mesh: Mesh, objective: str, warm: list | None,
+           drive: _DriveSetup | None = None, choice: DriveChoice | None = None, relaxed: bool = False,
+           radius0: float | None = None, pin_times: dict | None = None, enforce_accuracy: bool = False,
+           with_terms: bool = True):
+    b = _Built(relaxed=relaxed)
+    moves, xs, durations = _add_moves(b, problem, spm, settings, mesh, objective, warm)
+    ctx = _Context(problem, settings, mesh, moves, xs, b, drive, choice, T=durations)
+    ctx.extra["spm"] = spm
+    ctx.extra["pin_times"] = dict(pin_times or {})
+    ctx.extra["enforce_accuracy"] = enforce_accuracy or relaxed
+    ctx.extra["with_terms"] = with_terms or relaxed
+    if drive is not None and pin_times is None and warm is None:
+        y0, v0, a_nodes = _initial_unit(mesh, settings.rest_order)
+        ctx.extra["pin_times"] = _initial_pin_times(ctx, drive, [MoveSolution(mesh, y0, v0, a_nodes)] * len(moves))
+    if drive is not None and pin_times is None and warm is not None and all(w.mesh == mesh for w in warm):
+        ctx.extra["pin_times"] = _initial_pin_times(ctx, drive, warm)
+    if drive is not None:
+        _add_drive(ctx, radius0)
+    ctx.extra["objective"] = objective
     f = _objective(ctx, objective)
+    if relaxed:
+        f = sum(s for _, s in b.limits if s is not None) * 1e3 + 1e-6 * f
     return ctx, f
+
+
+def _add_drive(ctx: _Context, radius0: float | None) -> None:
+    """Motor torque, speed, belt tension and inertia limits at every node (drive.py's load model)."""
+    from .drive import load_torque
+
+    b, drive, choice, mesh = ctx.built, ctx.drive, ctx.choice, ctx.mesh
+    # the pulley radius: fixed, or a decision variable scaled by a reference radius
+    if choice.teeth is not None:
+        pulley = drive.pulley(choice.teeth)
+        radius = b.param("radius", pulley.radius)
+        inertia = b.param("pulley inertia", pulley.inertia if ctx.settings.include_pulley_inertia else 0.0)
+        r_ref = pulley.radius
+    else:
+        lo, hi = choice.radius_bounds
+        r_ref = float(np.sqrt(lo * hi))
+        start = radius0 if radius0 is not None else ctx.problem.transmission.radius
+        rho = b.var("radius", (1, 1), lo / r_ref, hi / r_ref, float(np.clip(start, lo, hi)) / r_ref)
+        radius = rho * r_ref
+        inertia = drive.pulley_inertia(2 * radius)
+    trans = _SizedBelt(radius, inertia)
+    # the motor: fixed, or a Bonmin choice among candidates (binary weights)
+    pct = drive.limits.peak_limit_pct / 100
+
+    def peak_limit(m):  # the motor's peak torque, or the drive's overload limit if lower
+        return min(m.peak_torque, pct * m.rated_torque)
+
+    if choice.candidates:
+        cands = choice.candidates
+        pick = b.var("motor", (len(cands), 1), 0.0, 1.0, [1.0] + [0.0] * (len(cands) - 1))
+        b.constrain("one motor", ca.sum1(pick) - 1.0, 0.0, 0.0)
+        ctx.extra.update(discrete=("motor", len(cands)), pick=pick)
+
+        def mix(values):
+            return ca.dot(pick, ca.DM(values))
+
+        rotor = mix([m.rotor_inertia for m in cands])
+        peak_lim = mix([peak_limit(m) for m in cands])
+        rated = mix([m.rated_torque for m in cands])
+        speed = mix([m.rated_speed for m in cands])
+        # for messages: the loosest limits of the candidates
+        peak_num = max(peak_limit(m) for m in cands)
+        rated_num = max(m.rated_torque for m in cands)
+        speed_num = max(m.rated_speed for m in cands)
+        motor_name = "any catalogue motor"
+    else:
+        m = choice.motor
+        rotor = b.param("rotor inertia", m.rotor_inertia)
+        peak_num, rated_num, speed_num = peak_limit(m), m.rated_torque, m.rated_speed
+        peak_lim = b.param("peak limit", peak_num)
+        rated = b.param("rated torque", rated_num)
+        speed = b.param("rated speed", speed_num)
+        motor_name = m.name
+    tau_ref = drive.tau_ref  # a scale: the same for every motor, so one solver serves them all
+    ctx.extra.update(radius=radius, r_ref=r_ref, tau_ref=tau_ref, trans=trans, rotor=rotor)
+    peak_what = (f"peak torque ({motor_name}: peak {'%.3g' % peak_num} N m"
+                 f"{', drive limit %g %% of rated' % drive.limits.peak_limit_pct if pct * (rated_num) < peak_num + 1e-12 and not choice.candidates else ''})")
+    nodes = mesh.nodes
+    torques, forces = [], []
+    sum_sq = 0.0  # integral of (torque/tau_ref)^2 over the moves, divided by the period
+    x_q, w_q = mesh.quadrature
+    period = b.param("period", ctx.problem.timing.period(ctx.extra["spm"]))
+    greville = np.linspace(0.0, 1.0, mesh.degree + 1)
+    for k, mv in enumerate(ctx.moves):
+        # Torque (linear in the acceleration) is held at the Bernstein control points of the
+        # acceleration polynomial (with position and speed at their Greville abscissae), not only at
+        # the nodes: the acceleration part is then bounded everywhere in the interval (convex hull),
+        # so the optimiser cannot hide a torque peak between two nodes.
+        s = ca.vec(ctx.si(k, greville, "s")).T
+        v = ca.vec(ctx.si(k, nodes, "v")).T
+        a = ca.vec(ctx.vars[k].hull("a") * (mv.stroke / ctx.T[k] ** 2)).T
+        terms = load_torque(rotor, trans, drive.load, s, 0 * s, a)
+        tau = terms.total / tau_ref
+        forces.append(terms.load_force)
+        # where a load force switches on inside the move (a spring met), the torque jumps: the
+        # collocation nodes alone would let the optimiser hide the worst side of the jump between
+        # two nodes. A pinned point at the crossing (found from the previous solution, updated
+        # until it stops moving, see _solve_one) holds both sides of the jump.
+        pin_t, pin_f = _pins(ctx, k, mv, rotor, trans)
+        tau = ca.horzcat(tau, pin_t / tau_ref)
+        forces.append(pin_f)
+        torques.append(tau)
+        lim = _Limit(f"peak torque move {mv.index}", peak_what, peak_num, "N m",
+                     lambda sig, pl=peak_num, tr=tau_ref: pl + sig * tr, mv.index)
+        b.limit_abs(lim, tau * (tau_ref / peak_lim))
+        # speed: |v| / r <= the motor's rated speed
+        omega = v / radius
+        rpm = 60 / (2 * math.pi)
+        lim = _Limit(f"speed move {mv.index}", f"motor speed ({motor_name}: rated)", speed_num * rpm, "rpm",
+                     lambda sig, sp=speed_num * rpm: sp * (1 + sig), mv.index)
+        b.limit_abs(lim, omega / speed)
+        # integral of torque squared over the move (Gauss-Legendre points)
+        # accumulated along the move in a chain of variables, one link per mesh interval: a single
+        # sum over every node would make one dense Jacobian row (costly to differentiate)
+        sq, vq, aq = (ctx.si(k, x_q, kind) for kind in ("s", "v", "a"))  # N x len(x_q)
+        tq = load_torque(rotor, trans, drive.load, sq, vq, aq).total / tau_ref
+        per_interval = ca.mtimes(tq**2, ca.DM(w_q)) * (mesh.h * ctx.T[k] / period)
+        Q = b.var(f"torque2 move {mv.index}", (mesh.intervals + 1, 1), -np.inf, np.inf, 0.0)
+        b.constrain(f"torque2 move {mv.index}", ca.vertcat(Q[0], Q[1:] - Q[:-1] - per_interval), 0.0, 0.0)
+        sum_sq = sum_sq + Q[-1]
+    # the dwells: at rest, torque from gravity and load forces only
+    sch = ctx.problem.timing.schedule(ctx.extra["spm"])
+    dwell_sq = 0.0
+    dwell_tau = []
+    for itv, dur in zip(ctx.problem.timing.intervals, sch.duration):
+        if itv.is_move:
+            continue
+        terms = load_torque(rotor, trans, drive.load, ca.MX(itv.start_position), ca.MX(0.0), ca.MX(0.0))
+        t_d = terms.total / tau_ref
+        dwell_tau.append(t_d)
+        forces.append(terms.load_force)
+        dwell_sq = dwell_sq + t_d**2 * b.param(f"dwell {itv.index} share", float(dur) / sch.period)
+    if dwell_tau:
+        tau_d = ca.vertcat(*dwell_tau)
+        lim = _Limit("peak torque dwells", peak_what + " holding in the dwells", peak_num, "N m",
+                     lambda sig, pl=peak_num, tr=tau_ref: pl + sig * tr)
+        b.limit_abs(lim, tau_d * (tau_ref / peak_lim))
+    mean_sq = sum_sq + dwell_sq  # (RMS torque / tau_ref)^2
+    lim = _Limit("RMS torque", f"RMS torque ({motor_name}: rated torque)", rated_num, "N m",
+                 lambda sig, r=rated_num, tr=tau_ref: math.sqrt(r**2 + sig * tr**2))
+    b.limit(lim, mean_sq - (rated / tau_ref) ** 2)
+    ctx.extra.update(torques=torques, dwell_torques=dwell_tau, mean_sq=mean_sq, move_sq=sum_sq, period=sch.period)
+    ctx.extra["period"] = sch.period
+    # belt tension
+    f_allow = drive.allowable_belt_force(choice.teeth)
+    if f_allow is not None:
+        allf = ca.horzcat(*[ca.reshape(f, 1, -1) for f in forces]) / b.param("belt force limit", f_allow)
+        lim = _Limit("belt tension", "allowable belt tension", f_allow, "N", lambda sig, fa=f_allow: fa * (1 + sig))
+        b.limit_abs(lim, allf)
+    # inertia ratio (only a constraint when the radius is free)
+    if choice.teeth is None and not choice.candidates:
+        reflected = inertia + drive.load.moving_mass * radius**2
+        lim = _Limit("inertia ratio", "load/rotor inertia ratio", drive.limits.max_inertia_ratio, "-",
+                     lambda sig, mr=drive.limits.max_inertia_ratio: mr * (1 + sig))
+        b.limit(lim, reflected / (rotor * drive.limits.max_inertia_ratio) - 1.0)
+    # handover accuracy: the error terms (static belt deflection; the servo loop adds its own)
+    terms = ([t for t in (term(ctx) for term in HANDOVER_ERROR_TERMS) if t is not None]
+             if ctx.extra.get("with_terms", True) else [])
+    ctx.extra["handover_terms"] = terms
+    total = sum(v for _, v in terms) if terms else 0.0
+    ctx.extra["handover_total"] = total
+    # A lazy constraint: a term may sum over a whole move (a servo tracking error), which makes a
+    # dense Hessian block that is costly to build and factorise. The solve runs without it, checks
+    # it at the solution, and only if it is violated re-solves with it (see _solve_one).
+    if terms and isinstance(total, (ca.MX, ca.SX)) and ctx.extra.get("enforce_accuracy"):
+        acc = ctx.settings.accuracy
+        lim = _Limit("handover accuracy", "handover accuracy", acc, "m", lambda sig, ac=acc: ac * (1 + sig))
+        b.limit(lim, total / acc - 1.0)
+
+
+def _switch_positions(drive: _DriveSetup) -> list[float]:
+    return [f.contact_position for f in drive.load.forces if f.kind == "spring"]
+
+
+def _pins(ctx: _Context, k: int, mv: _Move, rotor, trans):
+    """Torque and belt force (row vectors) on both sides of every load switch the move passes.
+
+    The point is given by parameters (interval one-hot ``e``, basis rows at the local time), so
+    moving it does not change the NLP's structure. ``ctx.extra["pin_times"]`` holds the unit
+    times (None: not crossed, the point is switched off by a zero weight).
+    """
+    from .drive import load_torque
+
+    b, mesh, x = ctx.built, ctx.mesh, ctx.vars[k]
+    lo, hi = sorted((mv.start, mv.start + mv.stroke))
+    taus, forces = [], []
+    for pos in _switch_positions(ctx.drive):
+        if not lo < pos < hi:
+            continue
+        tau_c = ctx.extra.setdefault("pin_times", {}).get((k, pos))
+        e_val = np.zeros(mesh.intervals)
+        la_val = np.zeros(mesh.degree + 1)
+        lv_val = np.zeros(mesh.degree + 1)
+        weight = 0.0
+        if tau_c is not None:
+            idx = min(int(tau_c / mesh.h), mesh.intervals - 1)
+            theta = tau_c / mesh.h - idx
+            m = mesh.matrices([theta])
+            e_val[idx], la_val, lv_val, weight = 1.0, m["a"][0], m["v"][0], 1.0
+        e = ca.vertcat(*[b.param(f"pin e{k}.{pos}.{i}", v) for i, v in enumerate(e_val)])
+        la = ca.vertcat(*[b.param(f"pin a{k}.{pos}.{i}", v) for i, v in enumerate(la_val)])
+        lv = ca.vertcat(*[b.param(f"pin v{k}.{pos}.{i}", v) for i, v in enumerate(lv_val)])
+        w = b.param(f"pin w{k}.{pos}", weight)
+        a_unit = ca.mtimes(e.T, ca.mtimes(x.A, la))
+        v_unit = ca.mtimes(e.T, x.V[:-1]) + mesh.h * ca.mtimes(e.T, ca.mtimes(x.A, lv))
+        v = v_unit * mv.stroke / ctx.T[k]
+        a = a_unit * mv.stroke / ctx.T[k] ** 2
+        eps = 1e-9 * max(abs(mv.stroke), 1e-3)
+        for side in (-eps, eps):
+            terms = load_torque(rotor, trans, ctx.drive.load, ca.MX(pos + side), v, a)
+            taus.append(w * terms.total)
+            forces.append(w * terms.load_force)
+        ctx.extra.setdefault("pins", []).append((k, pos))
+    return (ca.horzcat(*taus) if taus else ca.MX(1, 0)), (ca.horzcat(*forces) if forces else ca.MX(1, 0))
+
+
+def _initial_pin_times(ctx: _Context, drive: _DriveSetup, sols: list[MoveSolution]) -> dict:
+    out = {}
+    for k, mv in enumerate(ctx.moves):
+        lo, hi = sorted((mv.start, mv.start + mv.stroke))
+        for pos in _switch_positions(drive):
+            if lo < pos < hi:
+                cross = _crossings(sols[k], mv, [pos], fine_grid(sols[k].mesh, 4))
+                out[(k, pos)] = float(cross[0]) if len(cross) else None
+    return out
+
+
+def _pin_times(ctx: _Context, sols: list[MoveSolution]) -> dict:
+    """Unit times where each move of ``sols`` first passes each load switch (None: it does not)."""
+    out = {}
+    for k, pos in ctx.extra.get("pins", []):
+        mv, sol = ctx.moves[k], sols[k]
+        cross = _crossings(sol, mv, [pos], fine_grid(sol.mesh, 4))
+        out[(k, pos)] = float(cross[0]) if len(cross) else None
+    return out
+
+
+def static_belt_deflection(ctx: _Context):
+    """Handover error term: static stretch of the belt span under the rest force at the handover [m].
+
+    ``F * L / EA`` with ``F`` the effective belt tension at rest at the handover
+    position (gravity and load forces, drive.py), ``L`` the free belt length
+    (``[design] belt_span_mm``) and ``EA`` the belt's tensile stiffness
+    (``[design] belt_tensile_stiffness_N``). None (no term) when either is not given.
+    """
+    s = ctx.settings
+    if ctx.drive is None or s.belt_tensile_stiffness is None or s.belt_span is None:
+        return None
+    return "static belt deflection", ctx.drive.handover_force() * s.belt_span / s.belt_tensile_stiffness
+
+
+#: The terms of the position error at the handover, summed and held within
+#: ``[design] handover_accuracy_mm``. Each is a function of the NLP context
+#: returning ``(name, error in metres)`` (a number, or a CasADi expression of the
+#: design variables, e.g. a servo tracking error that depends on the
+#: acceleration near the handover), or None when it does not apply.
+#: Extension point: the servo issue appends its tracking-error term here.
+HANDOVER_ERROR_TERMS: list = [static_belt_deflection]
 
 
 def _objective(ctx: _Context, objective: str):
@@ -345,23 +800,51 @@ def _objective(ctx: _Context, objective: str):
     if objective == "min_peak_accel":
         a_ref = max(mv.a_scale for mv in moves)
         z = b.var("peak_accel", (1, 1), 0.0, np.inf, 6.0 * max(mv.a_scale for mv in moves) / a_ref)
-        for mv, x in zip(moves, xs):
-            ratio = mv.a_scale / a_ref
-            a = ratio * x.hull("a")  # bounds the acceleration everywhere, not only at the nodes
+        for mv, x, T in zip(moves, xs, ctx.T):
+            a = (abs(mv.stroke) / T**2 / a_ref) * x.hull("a")  # bounds the acceleration everywhere, not only at the nodes
             b.constrain(f"peak accel epigraph move {mv.index}", ca.vertcat(ca.vec(z - a), ca.vec(z + a)), 0.0, np.inf)
-        ctx.extra.update(scale=a_ref, unit="m/s^2")
+        ctx.extra.update(scale=a_ref, unit="m/s^2", transform=lambda f: f * a_ref)
         return z
     if objective in ("min_accel_squared", "min_jerk", "min_snap"):
         kind, power = {"min_accel_squared": ("a", 3), "min_jerk": ("j", 5), "min_snap": ("snap", 7)}[objective]
         # integral over the move of (stroke/T^p * y^(k))^2 dt = stroke^2 / T^(2p-1) * integral over unit time
-        weights = [mv.stroke**2 / mv.duration**power for mv in moves]
-        ref = max(weights)
-        total = sum((w / ref) * x.integral(kind) for w, x in zip(weights, xs))
+        ref = max(mv.stroke**2 / mv.duration**power for mv in moves)
+        total = sum((mv.stroke**2 / T**power / ref) * x.integral(kind) for mv, x, T in zip(moves, xs, ctx.T))
         unit = {"a": "m^2/s^3", "j": "m^2/s^5", "snap": "m^2/s^7"}[kind]
-        ctx.extra.update(scale=ref, unit=unit)
+        ctx.extra.update(scale=ref, unit=unit, transform=lambda f: f * ref)
         return total
-    raise ProblemError(str(ctx.problem.file), "design.objective",
-                       f"objective {objective!r} needs the drive model (load torque); it is not available here")
+    if ctx.drive is None:
+        raise ProblemError(str(ctx.problem.file), "design.objective",
+                           f"objective {objective!r} needs the drive (motor, load): add a [drive] section, or choose "
+                           f"one of {', '.join(KINEMATIC_OBJECTIVES)}")
+    tau_ref = ctx.extra["tau_ref"]
+    if objective == "min_peak_torque":
+        # The epigraph bound is one value, held as a chain of equal copies, one per mesh interval:
+        # a single variable in every epigraph row would be a dense Jacobian column, which together
+        # with a dense row (an accuracy term summing over the whole move) makes CasADi's
+        # derivative generation slow.
+        n = ctx.mesh.intervals
+        Z = b.var("peak_torque", (n * len(moves) + 1, 1), 0.0, np.inf, 1.0)
+        b.constrain("peak torque chain", Z[1:] - Z[:-1], 0.0, 0.0)
+        d1 = ctx.mesh.degree + 1
+        for k, (mv, tau) in enumerate(zip(moves, ctx.extra["torques"])):
+            zk = Z[k * n:(k + 1) * n]
+            zrow = ca.horzcat(ca.repmat(zk, d1, 1).T, ca.repmat(zk[0], 1, tau.shape[1] - n * d1))
+            b.constrain(f"peak torque epigraph move {mv.index}", ca.vertcat((zrow - tau).T, (zrow + tau).T),
+                        0.0, np.inf)
+        if ctx.extra["dwell_torques"]:
+            tau_d = ca.vertcat(*ctx.extra["dwell_torques"])
+            b.constrain("peak torque epigraph dwells", ca.vertcat(Z[-1] - tau_d, Z[-1] + tau_d), 0.0, np.inf)
+        ctx.extra.update(unit="N m", transform=lambda f: f * tau_ref)
+        return Z[0]
+    if objective == "min_rms_torque":
+        ctx.extra.update(unit="N m", transform=lambda f: math.sqrt(max(f, 0.0)) * tau_ref)
+        return ctx.extra["mean_sq"]
+    if objective == "min_energy":
+        period = ctx.extra["period"]
+        ctx.extra.update(unit="N^2 m^2 s", transform=lambda f: f * tau_ref**2 * period)
+        return ctx.extra["move_sq"]
+    raise ProblemError("--objective", "", f"{objective!r} is not one of {', '.join(OBJECTIVES)}")
 
 
 def _solver_options(settings: DesignSettings, extra: dict | None, verbose: bool) -> dict:
@@ -374,33 +857,67 @@ def _solver_options(settings: DesignSettings, extra: dict | None, verbose: bool)
     return opts
 
 
+_SOLVERS: dict = {}  # structure key -> (problem, solver); see _solve_nlp
+_SOLVER_CACHE_SIZE = 16
+
+
+def _structure_key(ctx: _Context, options: dict) -> tuple:
+    """What fixes the NLP's structure; solves that share it share one built solver (parameters differ)."""
+    choice = ctx.choice
+    return (id(ctx.problem), repr(ctx.settings), ctx.mesh, ctx.extra.get("objective"), ctx.built.relaxed,
+            repr(sorted(options.items())), tuple(mv.jerk_bound is None for mv in ctx.moves),
+            None if choice is None else (choice.teeth is None, choice.radius_bounds,
+                                         tuple(m.name for m in choice.candidates)),
+            ctx.drive is not None and ctx.drive.belt is None, len(ctx.built.p), ctx.built.n_w, ctx.built.n_g)
+
+
 def _solve_nlp(ctx: _Context, f, options: dict):
+    """Solve the NLP of ``ctx``; the solver (CasADi's costly derivative generation) is built once per structure."""
     b = ctx.built
-    w = ca.vertcat(*b.w)
-    g = ca.vertcat(*b.g)
     opts = dict(options)
     plugin = opts.pop("plugin", "ipopt")
-    solver = ca.nlpsol("design", plugin, {"x": w, "f": f, "g": g}, opts)
+    key = _structure_key(ctx, options)
+    cached = _SOLVERS.get(key)
+    if cached is not None and cached[0] is ctx.problem:
+        solver = cached[1]
+    else:
+        w, g, p = ca.vertcat(*b.w), ca.vertcat(*b.g), ca.vertcat(*b.p)
+        if plugin == "bonmin":
+            opts = {k: v for k, v in opts.items() if not k.startswith("ipopt.")}
+            opts.update({"bonmin.print_level": 0, "bonmin.bb_log_level": 0, "bonmin.nlp_log_level": 0,
+                         "bonmin.fp_log_level": 0, "bonmin.lp_log_level": 0, "bonmin.milp_log_level": 0,
+                         "bonmin.oa_log_level": 0})
+            if "discrete" in ctx.extra:
+                discrete = np.zeros(w.shape[0], dtype=bool)
+                offset, count = b.offsets[ctx.extra["discrete"][0]]
+                discrete[offset:offset + count] = True
+                opts["discrete"] = discrete.tolist()
+        solver = ca.nlpsol("design", plugin, {"x": w, "f": f, "g": g, "p": p}, opts)
+        if len(_SOLVERS) >= _SOLVER_CACHE_SIZE:
+            _SOLVERS.pop(next(iter(_SOLVERS)))
+        _SOLVERS[key] = (ctx.problem, solver)
     sol = solver(x0=np.concatenate(b.w0), lbx=np.concatenate(b.lbw), ubx=np.concatenate(b.ubw),
-                 lbg=np.concatenate(b.lbg), ubg=np.concatenate(b.ubg))
-    stats = solver.stats()
-    return sol, stats
+                 lbg=np.concatenate(b.lbg), ubg=np.concatenate(b.ubg), p=np.array(b.pvals))
+    return sol, solver.stats(), solver
+
+
+def _value(ctx: _Context, expr, x: np.ndarray) -> np.ndarray:
+    """Numeric value of an expression of the NLP's variables and parameters at ``x``."""
+    b = ctx.built
+    fn = ca.Function("value", [ca.vertcat(*b.w), ca.vertcat(*b.p)], [expr])
+    return np.asarray(fn(x, np.array(b.pvals)))
 
 
 def _unpack(ctx: _Context, x: np.ndarray) -> list[MoveSolution]:
-    """Numeric MoveSolutions from the solution vector (same order as the variables were created)."""
+    """Numeric MoveSolutions from the solution vector."""
     out = []
     n, d = ctx.mesh.intervals, ctx.mesh.degree
-    fn = ca.Function("unpack", [ca.vertcat(*ctx.built.w)],
-                     [ca.vertcat(*[ca.vertcat(x_.S, x_.V, ca.vec(x_.A)) for x_ in ctx.vars])])
-    flat = np.asarray(fn(x)).ravel()
+    flat = _value(ctx, ca.vertcat(*[ca.vertcat(x_.S, x_.V, ca.vec(x_.A)) for x_ in ctx.vars]), x).ravel()
     size = 2 * (n + 1) + n * (d + 1)
     for k in range(len(ctx.vars)):
         chunk = flat[k * size:(k + 1) * size]
-        S = chunk[: n + 1]
-        V = chunk[n + 1: 2 * (n + 1)]
         A = chunk[2 * (n + 1):].reshape(d + 1, n).T  # ca.vec is column-major
-        out.append(MoveSolution(ctx.mesh, S, V, A))
+        out.append(MoveSolution(ctx.mesh, chunk[: n + 1], chunk[n + 1: 2 * (n + 1)], A))
     return out
 
 
@@ -486,6 +1003,7 @@ class Design:
     pitch_diameter: float | None = None
     motor: str | None = None
     notes: list[str] = field(default_factory=list)
+    motor_spec: Any = field(default=None, repr=False)  # the ServoMotor
 
     @property
     def solutions(self) -> list[MoveSolution]:
@@ -639,6 +1157,154 @@ def _move_results(moves: list[_Move], sols: list[MoveSolution], per_interval: in
 # --------------------------------------------------------------------------- solve
 
 
+@dataclass
+class _Outcome:
+    ctx: _Context
+    x: np.ndarray
+    sols: list
+    value: float
+    status: str
+    solve_time: float
+    iterations: int
+    fine: dict
+    radius: float | None = None
+    motor: Any = None
+    continuous_radius: float | None = None
+
+
+def _crossings(sol: MoveSolution, mv: _Move, positions, tau: np.ndarray) -> np.ndarray:
+    """Unit times where the move passes ``positions`` (where a load force switches on), both sides of each."""
+    if not positions:
+        return np.zeros(0)
+    y = sol.evaluate(tau)[0]
+    out = []
+    for pos in positions:
+        target = (pos - mv.start) / mv.stroke
+        f = y - target
+        for i in np.nonzero(np.sign(f[:-1]) * np.sign(f[1:]) <= 0)[0]:
+            lo, hi = tau[i], tau[i + 1]
+            for _ in range(60):  # bisection on the exact polynomial
+                mid = 0.5 * (lo + hi)
+                if (sol.evaluate(mid)[0][0] - target) * (sol.evaluate(lo)[0][0] - target) <= 0:
+                    hi = mid
+                else:
+                    lo = mid
+            out += [lo, hi]
+    return np.array(out)
+
+
+def _fine_cycle(problem, spm: float, moves: list[_Move], sols: list[MoveSolution], per_interval: int,
+                switch_positions=()):
+    """Times, positions, speeds, accelerations over one whole cycle: fine grids in the moves, dwell ends.
+
+    ``switch_positions``: positions where a load force switches (a spring met): the grid gets the
+    crossing times, both sides, so a jump of the load is read at its worst.
+    """
+    sch = problem.timing.schedule(spm)
+    ts, ss, vs, as_ = [], [], [], []
+    it = iter(zip(moves, sols))
+    for itv, t0, dur in zip(problem.timing.intervals, sch.t_start, sch.duration):
+        if itv.is_move:
+            mv, sol = next(it)
+            tau = fine_grid(sol.mesh, per_interval)
+            tau = np.unique(np.concatenate([tau, _crossings(sol, mv, switch_positions, tau)]))
+            y, y1, y2, _, _ = sol.evaluate(tau)
+            ts.append(t0 + tau * dur)
+            ss.append(mv.start + mv.stroke * y)
+            vs.append(y1 * mv.stroke / dur)
+            as_.append(y2 * mv.stroke / dur**2)
+        else:
+            ts.append(np.array([t0, t0 + dur]))
+            ss.append(np.full(2, itv.start_position))
+            vs.append(np.zeros(2))
+            as_.append(np.zeros(2))
+    return tuple(np.concatenate(x) for x in (ts, ss, vs, as_))
+
+
+def _drive_checks_fine(drive: _DriveSetup, motor, teeth: int | None, radius: float, problem, spm, moves, sols,
+                       per_interval: int) -> list:
+    """drive.py's checks of the solution, on a fine grid over the whole cycle."""
+    from .drive import drive_checks
+
+    switches = [f.contact_position for f in drive.load.forces if f.kind == "spring"]
+    t, s, v, a = _fine_cycle(problem, spm, moves, sols, per_interval, switches)
+    if teeth is not None:
+        trans = drive.transmission(teeth)
+    else:
+        trans = BeltPulley(2 * radius, inertia=float(drive.pulley_inertia(2 * radius)))
+    grooves = teeth if teeth is not None else drive.teeth_range[0]
+    return drive_checks(motor, trans, drive.load, t, s, v, a, limits=drive.limits, belt=drive.belt, grooves=grooves)
+
+
+_ENFORCED = {"peak_torque", "overload", "rms_torque", "peak_speed", "belt_width", "belt_breaking"}
+
+
+_PIN_ITERATIONS = 5
+
+
+def _same_time(a, b, tol: float = 1e-7) -> bool:
+    return (a is None and b is None) or (a is not None and b is not None and abs(a - b) <= tol)
+
+
+def _solve_one(problem, spm, settings, mesh, objective, warm, drive, choice, options, radius0=None,
+               with_terms: bool = True) -> _Outcome:
+    """One NLP with fixed parts (or a continuous radius / a Bonmin motor), refined where the fine grid demands."""
+    total_time, iterations = 0.0, 0
+    for attempt in range(settings.refinements + 1):
+        pin_times = None
+        enforce = False
+        for _ in range(_PIN_ITERATIONS):
+            t0 = time.perf_counter()
+            ctx, f = _build(problem, spm, settings, mesh, objective, warm, drive, choice, radius0=radius0,
+                            pin_times=pin_times, enforce_accuracy=enforce, with_terms=with_terms)
+            sol, stats, _ = _solve_nlp(ctx, f, options)
+            total_time += time.perf_counter() - t0
+            iterations += int(stats.get("iter_count", 0) or 0)
+            status = str(stats.get("return_status", "unknown"))
+            ok = stats.get("success", False) if choice is not None and choice.candidates else status in _STATUS_OK
+            if not ok:
+                raise _diagnose(problem, spm, settings, mesh, objective, drive, choice, status, options, radius0)
+            x = np.asarray(sol["x"]).ravel()
+            sols = _unpack(ctx, x)
+            new = _pin_times(ctx, sols)
+            old = ctx.extra["pin_times"]
+            total = ctx.extra.get("handover_total", 0.0)
+            violated = (not enforce and isinstance(total, (ca.MX, ca.SX))
+                        and float(_value(ctx, total, x).item()) > settings.accuracy)
+            if all(_same_time(new.get(key), old.get(key)) for key in new) and not violated:
+                break
+            pin_times, warm, enforce = new, sols, enforce or violated
+        fine, _ = _fine_grid_report(ctx.moves, sols, settings.check_points)
+        radius = motor = None
+        worst = fine["worst_relative_violation"]
+        if drive is not None:
+            r_expr = ctx.extra["radius"]
+            radius = float(r_expr) if isinstance(r_expr, float) else float(_value(ctx, r_expr, x).item())
+            motor = choice.motor
+            if choice.candidates:
+                pick = _value(ctx, ctx.extra["pick"], x).ravel()
+                motor = choice.candidates[int(np.argmax(pick))]
+            checks = _drive_checks_fine(drive, motor, choice.teeth, radius, problem, spm, ctx.moves, sols,
+                                        settings.check_points)
+            over = [max(0.0, -c.margin) for c in checks if c.name in _ENFORCED and math.isfinite(c.margin)]
+            if objective == "min_peak_torque":  # the epigraph held at the nodes; the fine grid reads the peak
+                nlp_peak = ctx.extra["transform"](float(sol["f"]))
+                fine_peak = next(c.value for c in checks if c.name == "peak_torque")
+                fine["peak_torque_nodes_N_m"] = nlp_peak
+                fine["peak_torque_fine_N_m"] = fine_peak
+                over.append(max(0.0, fine_peak / nlp_peak - 1.0))
+            worst = max([worst] + over)
+            fine["drive_checks"] = [c.as_dict() for c in checks]
+            fine["worst_relative_violation"] = worst
+        if worst <= settings.check_tolerance or attempt == settings.refinements:
+            break
+        mesh = Mesh(mesh.intervals * 2, mesh.degree)
+        warm = None
+    value = ctx.extra["transform"](float(sol["f"]))
+    return _Outcome(ctx, x, sols, value, "optimal" if status == "Solve_Succeeded" else "acceptable", total_time,
+                    iterations, fine, radius, motor)
+
+
 def solve_design(problem, *, objective: str | None = None, spm: float | None = None,
                  settings: DesignSettings | None = None, mesh: Mesh | None = None, warm_start=None,
                  solver_options: dict | None = None, verbose: bool = False) -> Design:
@@ -647,101 +1313,354 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     ``objective`` overrides ``[design] objective``; ``mesh`` overrides its mesh;
     ``warm_start`` is a previous :class:`Design` (or its move solutions) to start from;
     ``solver_options`` are passed to ``casadi.nlpsol`` over the defaults.
+    Raises :class:`SolverError` naming the constraint that cannot be met.
     """
     settings = settings or getattr(problem, "design", None) or DesignSettings()
     objective = objective or settings.objective
     if objective not in OBJECTIVES:
         raise ProblemError("--objective", "", f"{objective!r} is not one of {', '.join(OBJECTIVES)}")
     spm = float(spm if spm is not None else problem.spm)
+    if not (math.isfinite(spm) and spm > 0):
+        raise ProblemError("--spm", "", f"must be positive, got {spm!r}")
     mesh = mesh or settings.mesh
     warm = warm_start.solutions if isinstance(warm_start, Design) else warm_start
+    radius0 = warm_start.radius if isinstance(warm_start, Design) else None
     options = _solver_options(settings, solver_options, verbose)
-    total_time = 0.0
-    iterations = 0
-    for attempt in range(settings.refinements + 1):
-        t0 = time.perf_counter()
-        ctx, f = _build(problem, spm, settings, mesh, objective, warm)
-        sol, stats = _solve_nlp(ctx, f, options)
-        total_time += time.perf_counter() - t0
-        iterations += int(stats.get("iter_count", 0))
-        status = stats.get("return_status", "unknown")
-        if status not in _STATUS_OK:
-            raise _diagnose(problem, spm, settings, mesh, objective, ctx, status, options)
-        sols = _unpack(ctx, np.asarray(sol["x"]).ravel())
-        report, _ = _fine_grid_report(ctx.moves, sols, settings.check_points)
-        if report["worst_relative_violation"] <= settings.check_tolerance or attempt == settings.refinements:
-            break
-        mesh = Mesh(mesh.intervals * 2, mesh.degree)
-        warm = None
-    value = float(sol["f"]) * ctx.extra["scale"]
+    drive = _DriveSetup(problem, settings) if getattr(problem, "drive", None) is not None else None
+    if drive is None and objective in TORQUE_OBJECTIVES:
+        raise ProblemError(str(problem.file), "design.objective",
+                           f"objective {objective!r} needs the drive (motor, load): add a [drive] section, or choose "
+                           f"one of {', '.join(KINEMATIC_OBJECTIVES)}")
+    _check_static_accuracy(problem, settings, drive)
+    t_start = time.perf_counter()
+    notes: list[str] = []
+    if drive is None:
+        best = _solve_one(problem, spm, settings, mesh, objective, warm, None, None, options)
+        teeth, pd, motor = None, None, None
+    else:
+        best, teeth, notes = _choose_parts(problem, spm, settings, mesh, objective, warm, drive, options, radius0)
+        # the chosen parts once more, now with the handover accuracy terms (lazy: only enforced if violated)
+        choice = DriveChoice(best.motor, teeth, None if teeth else drive.radius_bounds())
+        selection_time = best.solve_time
+        best = _solve_one(problem, spm, settings, best.ctx.mesh, objective, best.sols, drive, choice, options,
+                          best.radius, with_terms=True)
+        best.solve_time += selection_time
+        motor = best.motor
+        pd = 2 * best.radius
+    wall = time.perf_counter() - t_start
+    ctx, sols = best.ctx, best.sols
     stroke = stroke_from_solutions(problem, spm, sols, label=f"optimal ({objective})")
     moves = _move_results(ctx.moves, sols)
-    design = Design(problem, spm, objective, value, ctx.extra["unit"], stroke, moves, mesh,
-                    "optimal" if status == "Solve_Succeeded" else "acceptable", total_time, iterations,
-                    fine_grid=report)
-    design.checks, design.active_constraints = _kinematic_checks(ctx, moves, report)
-    if report["worst_relative_violation"] > settings.check_tolerance:
-        design.notes.append(f"between collocation nodes a bound is exceeded by "
-                            f"{100 * report['worst_relative_violation']:.2f} % (more than check_tolerance): "
+    design = Design(problem, spm, objective, best.value, ctx.extra["unit"], stroke, moves, best.ctx.mesh,
+                    best.status, wall, best.iterations, fine_grid=best.fine, pulley_teeth=teeth, pitch_diameter=pd,
+                    motor=None if motor is None else motor.name, notes=notes)
+    design.motor_spec = motor
+    design.checks, design.active_constraints = _report_checks(best, design)
+    if drive is not None:
+        # the objective as the fine grid reads it (the NLP saw the nodes)
+        design.objective_value = _fine_objective(design, best) if objective in TORQUE_OBJECTIVES else best.value
+    if best.fine["worst_relative_violation"] > settings.check_tolerance:
+        design.notes.append(f"between collocation nodes a limit is exceeded by "
+                            f"{100 * best.fine['worst_relative_violation']:.2f} % (more than check_tolerance "
+                            f"{100 * settings.check_tolerance:g} %) after {settings.refinements} refinements: "
                             f"use more mesh intervals")
     return design
 
 
-def _kinematic_checks(ctx: _Context, moves: list[MoveResult], report: dict) -> tuple[list[dict], list[str]]:
-    checks, active = [], []
-    for mv, row in zip(ctx.moves, report["moves"]):
+def _fine_objective(design: "Design", best: _Outcome) -> float:
+    checks = {c["name"]: c for c in best.fine.get("drive_checks", [])}
+    if design.objective == "min_peak_torque" and "peak_torque" in checks:
+        return float(checks["peak_torque"]["value"])
+    if design.objective == "min_rms_torque" and "rms_torque" in checks:
+        return float(checks["rms_torque"]["value"])
+    return best.value
+
+
+def _choose_parts(problem, spm, settings, mesh, objective, warm, drive: _DriveSetup, options, radius0):
+    """Motor (fixed, enumerated, or Bonmin) and pulley (fixed, or continuous radius then nearest tooth counts).
+
+    Enumeration prunes: the continuous-radius optimum of a motor is a lower bound of its
+    tooth-count optima, so a motor whose continuous optimum is no better than the best
+    design found so far is not solved for tooth counts.
+    """
+    notes = []
+    if settings.motor_choice == "bonmin":
+        cands = tuple(drive.motors())
+        bonmin_opts = {k: v for k, v in options.items() if k not in ("ipopt.max_iter",)}
+        bonmin_opts["plugin"] = "bonmin"
+        try:
+            first = _solve_one(problem, spm, settings, mesh, objective, warm, drive,
+                               DriveChoice(None, None if settings.pulley != "fixed" else problem.pulley_teeth,
+                                           drive.radius_bounds() if settings.pulley != "fixed" else None, cands),
+                               bonmin_opts, radius0, with_terms=False)
+        except SolverError as exc:
+            raise SolverError(f"no motor of the catalogue meets the limits at {spm:g} spm (Bonmin): {exc.reason}") from None
+        motors = [first.motor]
+        notes.append(f"motor chosen by Bonmin among {len(cands)} candidates (a heuristic for this non-convex problem)")
+    elif settings.motor_choice == "enumerate":
+        motors = drive.motors()
+    else:
+        motors = [drive.fixed_motor()]
+    failures = []
+    # phase 1: every motor with its own best pulley radius (continuous), or the fixed pulley
+    first_pass = []
+    for motor in motors:
+        try:
+            if settings.pulley == "fixed":
+                out = _solve_one(problem, spm, settings, mesh, objective, warm, drive,
+                                 DriveChoice(motor, problem.pulley_teeth), options,
+                                 with_terms=False)
+            else:
+                out = _solve_one(problem, spm, settings, mesh, objective, warm, drive,
+                                 DriveChoice(motor, None, drive.radius_bounds()), options, radius0,
+                                 with_terms=False)
+                radius0 = out.radius
+            warm = out.sols
+            first_pass.append((out, motor))
+        except SolverError as exc:
+            failures.append((motor, exc))
+    total_time = sum(o.solve_time for o, _ in first_pass)
+    # phase 2: tooth counts next to the continuous optimum, best lower bounds first
+    results = []
+    if settings.pulley in ("fixed", "continuous"):
+        results = [(o, problem.pulley_teeth if settings.pulley == "fixed" else None) for o, _ in first_pass]
+    else:
+        for cont, motor in sorted(first_pass, key=lambda r: r[0].value):
+            if results and cont.value >= min(r[0].value for r in results):
+                continue
+            try:
+                out, teeth = _nearest_teeth(problem, spm, settings, mesh, objective, drive, motor, options, cont)
+                results.append((out, teeth))
+                total_time += out.solve_time
+            except SolverError as exc:
+                failures.append((motor, exc))
+    if not results:
+        if len(failures) == 1:
+            raise failures[0][1]
+        reasons = "; ".join(f"{m.name}: {e.reason}" for m, e in failures)
+        raise SolverError(f"no motor of the catalogue can drive this design at {spm:g} spm ({reasons})")
+    best, teeth = min(results, key=lambda r: r[0].value)
+    if len(motors) > 1:
+        notes.append(f"motor chosen among {len(motors)} by enumeration ({len(failures)} infeasible): "
+                     f"lowest {objective}")
+    best.solve_time = total_time
+    return best, teeth, notes
+
+
+def _nearest_teeth(problem, spm, settings, mesh, objective, drive, motor, options, cont: _Outcome):
+    """Re-solve with the tooth counts either side of the continuous optimum; keep the better."""
+    from .actuators import PROFILE_PITCH
+
+    z = 2 * math.pi * cont.radius / PROFILE_PITCH[drive.profile]
+    available = [p.teeth for p in drive.catalogue.pulleys_of(drive.profile, *drive.teeth_range)]
+    if not available:
+        raise ProblemError(drive.file, "design.pulley_teeth_min", f"the catalogue has no {drive.profile} pulley "
+                                                                  f"with {drive.teeth_range[0]}-{drive.teeth_range[1]} teeth")
+    below = [n for n in available if n <= z]
+    above = [n for n in available if n >= z]
+    candidates = sorted({max(below) if below else min(available), min(above) if above else max(available)})
+    best, failures = None, []
+    for teeth in candidates:
+        try:
+            out = _solve_one(problem, spm, settings, mesh, objective, cont.sols, drive, DriveChoice(motor, teeth),
+                             options, with_terms=False)
+        except SolverError as exc:
+            failures.append(exc)
+            continue
+        if best is None or out.value < best[0].value:
+            best = (out, teeth)
+    if best is None:
+        raise failures[0]
+    best[0].continuous_radius = cont.radius
+    return best
+
+
+def _check_static_accuracy(problem, settings, drive) -> None:
+    """Handover error terms that do not depend on the design: checked before solving."""
+    if drive is None:
+        return
+    ctx = _Context(problem, settings, settings.mesh, [], [], _Built(), drive, None)
+    terms = [t for t in (term(ctx) for term in HANDOVER_ERROR_TERMS) if t is not None]
+    fixed = [(n, v) for n, v in terms if isinstance(v, (int, float))]
+    total = sum(v for _, v in fixed)
+    if total > settings.accuracy:
+        parts = ", ".join(f"{n} {v * 1e3:.3f} mm" for n, v in fixed)
+        raise SolverError(f"handover accuracy cannot be met: {parts} exceeds the allowed "
+                          f"{settings.accuracy * 1e3:g} mm by {(total - settings.accuracy) * 1e3:.3f} mm")
+
+
+def _report_checks(best: _Outcome, design: "Design") -> tuple[list[dict], list[str]]:
+    """Every check with its margin (fine grid), and the constraints active at the solution."""
+    ctx = best.ctx
+    checks = []
+    for mv, row in zip(ctx.moves, best.fine["moves"]):
         if mv.jerk_bound is not None:
             value = row["jerk_max_fine_m_s3"]
-            margin = 1.0 - value / mv.jerk_bound
-            checks.append({"name": f"jerk move {mv.index}", "value": value, "limit": mv.jerk_bound,
-                           "unit": "m/s^3", "margin": margin, "ok": margin >= -ctx.settings.check_tolerance})
-            if margin < 1e-3:
-                active.append(f"jerk bound move {mv.index}")
+            checks.append({"name": f"jerk move {mv.index}", "value": value, "limit": mv.jerk_bound, "unit": "m/s^3",
+                           "margin": 1.0 - value / mv.jerk_bound,
+                           "ok": value <= mv.jerk_bound * (1 + ctx.settings.check_tolerance)})
+    checks += list(best.fine.get("drive_checks", []))
+    for name, value in ctx.extra.get("handover_terms", []):
+        v = float(value) if isinstance(value, (int, float)) else float(_value(ctx, value, best.x).item())
+        acc = ctx.settings.accuracy
+        checks.append({"name": f"handover accuracy ({name})", "value": v * 1e3, "limit": acc * 1e3, "unit": "mm",
+                       "margin": 1.0 - v / acc, "ok": v <= acc})
+    active = []
+    # active limit groups: the largest scaled residual of each group within 1e-4 of its bound
+    for (lim, _), g in zip(ctx.built.limits, _limit_values(ctx, best.x)):
+        if g > -1e-4:
+            active.append(lim.name)
     for mv in ctx.moves:
-        if ctx.problem.timing.intervals[mv.interval - 1].handover:
-            active.append(f"handover position (end of move {mv.index}, {mv.start + mv.stroke:+.4g} m, exact)")
+        itv = ctx.problem.timing.intervals[mv.interval - 1]
+        if itv.handover:
+            active.append(f"handover position: end of move {mv.index} at {(mv.start + mv.stroke) * 1e3:g} mm (exact)")
     return checks, active
 
 
-def _diagnose(problem, spm, settings, mesh, objective, ctx, status, options) -> SolverError:
-    """Why a solve failed: relax each bound in turn and report what it would need."""
-    for mv in ctx.moves:
-        if mv.jerk_bound is None:
+def _limit_values(ctx: _Context, x: np.ndarray) -> list[float]:
+    """Largest scaled residual (``expr``, satisfied when <= 0) of every limit group at ``x``."""
+    exprs = ctx.built.limit_exprs
+    if not exprs:
+        return []
+    return [float(v) for v in _value(ctx, ca.vertcat(*[ca.mmax(e) for e in exprs]), x).ravel()]
+
+
+def _diagnose(problem, spm, settings, mesh, objective, drive, choice, status, options, radius0) -> SolverError:
+    """Why a solve failed: relax every limit group, minimise the total excess, name the worst."""
+    where = f" for motor {choice.motor.name}" if choice is not None and choice.motor is not None else ""
+    try:
+        ctx, f = _build(problem, spm, settings, mesh, objective, None, drive, choice, relaxed=True, radius0=radius0)
+        opts = {k: v for k, v in options.items() if k != "plugin"}
+        sol, stats, _ = _solve_nlp(ctx, f, opts)
+    except (RuntimeError, ValueError) as exc:  # pragma: no cover - a relaxed problem is always feasible
+        return SolverError(f"the design problem at {spm:g} spm{where} could not be solved (IPOPT: {status}; {exc})")
+    if str(stats.get("return_status")) not in _STATUS_OK:
+        return SolverError(f"the design problem at {spm:g} spm{where} could not be solved (IPOPT: {status}); "
+                           f"even with every limit relaxed: check the timing and the rest conditions")
+    x = np.asarray(sol["x"]).ravel()
+    worst = None
+    for lim, slack in ctx.built.limits:
+        sig = float(_value(ctx, slack, x)) if slack is not None else 0.0
+        if sig > 1e-6 and (worst is None or sig > worst[1]):
+            worst = (lim, sig)
+    if worst is None:
+        return SolverError(f"IPOPT did not converge at {spm:g} spm{where} ({status}) although the limits can be met: "
+                           f"try more mesh intervals, or --verbose to see the solver log")
+    lim, sig = worst
+    need = lim.need(sig)
+    over = f"{100 * (need / lim.limit - 1):.1f} % over" if lim.limit else ""
+    unit = lim.unit
+    shown_need, shown_lim = need, lim.limit
+    if unit == "m":
+        shown_need, shown_lim, unit = need * 1e3, lim.limit * 1e3, "mm"
+    subject = f"move {lim.move} too short" if lim.move is not None else "the design cannot meet the limits"
+    motor = f" for motor {choice.motor.name}" if choice is not None and choice.motor is not None else ""
+    return SolverError(f"{subject}{motor} at {spm:g} spm: {lim.what} needs {shown_need:.4g} {unit}, "
+                       f"limit {shown_lim:.4g} {unit} ({over})")
+
+
+# --------------------------------------------------------------------------- comparison and report
+
+
+def _stroke_measures(design: "Design", stroke: StrokeFunction, samples: int = 20_001) -> dict:
+    """Peak acceleration and jerk over the moves, integrals of a^2 and jerk^2, and (with a drive) torques."""
+    problem, spm = design.problem, design.spm
+    sch = problem.timing.schedule(spm)
+    a_max = j_max = 0.0
+    int_a2 = int_j2 = 0.0
+    peaks = stroke.piece_peaks(samples=2001)
+    for itv, t0, dur, pk in zip(problem.timing.intervals, sch.t_start, sch.duration, peaks):
+        if not itv.is_move:
             continue
-        relaxed = replace(settings, jerk_max=None, jerk_max_from_law=False)
-        one = replace(problem)  # the same problem; only the move's need is read
-        need = _min_peak_jerk(one, spm, relaxed, mesh, mv)
-        if need > mv.jerk_bound * (1 + 1e-6):
-            return SolverError(f"move {mv.index} ({mv.name}) too short for the jerk bound at {spm:g} spm: needs "
-                               f"{need:.4g} m/s^3, bound {mv.jerk_bound:.4g} m/s^3 "
-                               f"({100 * (need / mv.jerk_bound - 1):.1f} % over)")
-    return SolverError(f"the design problem at {spm:g} spm could not be solved (IPOPT: {status}); "
-                       f"no single bound explains it: try more mesh intervals or --verbose")
+        a_max = max(a_max, pk.a_max)
+        j_max = max(j_max, pk.j_max)
+        t = np.linspace(t0, t0 + dur, 2001)[:-1] + dur / 4000
+        k = stroke.evaluate(t)
+        int_a2 += float(np.sum(k.a**2) * dur / len(t))
+        int_j2 += math.inf if math.isinf(pk.j_max) else float(np.sum(k.j**2) * dur / len(t))
+    row = {"a_max_m_s2": a_max, "jerk_max_m_s3": j_max, "accel_squared": int_a2, "jerk_squared": int_j2}
+    if design.motor_spec is not None and problem.drive is not None:
+        from .drive import drive_checks, load_torque
+
+        drive = _DriveSetup(problem, getattr(problem, "design", None) or DesignSettings())
+        trans = drive.transmission(design.pulley_teeth) if design.pulley_teeth else \
+            BeltPulley(design.pitch_diameter, inertia=float(drive.pulley_inertia(design.pitch_diameter)))
+        k = stroke.sample(samples)
+        checks = {c.name: c.value for c in drive_checks(design.motor_spec, trans, drive.load, k.t, k.s, k.v, k.a,
+                                                         limits=drive.limits)}
+        tau = load_torque(design.motor_spec, trans, drive.load, k.s, k.v, k.a).total
+        moving = np.zeros_like(k.t, dtype=bool)
+        for itv, t0, dur in zip(problem.timing.intervals, sch.t_start, sch.duration):
+            if itv.is_move:
+                moving |= (k.t >= t0) & (k.t <= t0 + dur)
+        dt = k.t[1] - k.t[0]
+        row.update(peak_torque_N_m=checks["peak_torque"], rms_torque_N_m=checks["rms_torque"],
+                   energy=float(np.sum(tau[moving] ** 2) * dt),
+                   peak_speed_rpm=checks["peak_speed"])
+    return row
 
 
-def _min_peak_jerk(problem, spm, settings, mesh, mv: _Move) -> float:
-    """Smallest achievable peak |jerk| [m/s^3] of one move under the rest conditions (unit problem, then scaled)."""
-    b = _Built()
-    n, d = mesh.intervals, mesh.degree
-    y0, v0, a_nodes = _initial_unit(mesh, settings.rest_order)
-    s_lb, s_ub = np.full(n + 1, -np.inf), np.full(n + 1, np.inf)
-    s_lb[0] = s_ub[0] = 0.0
-    s_lb[-1] = s_ub[-1] = 1.0
-    v_lb, v_ub = np.full(n + 1, -np.inf), np.full(n + 1, np.inf)
-    v_lb[[0, -1]] = v_ub[[0, -1]] = 0.0
-    S = b.var("S", (n + 1, 1), s_lb, s_ub, y0)
-    V = b.var("V", (n + 1, 1), v_lb, v_ub, v0)
-    rest = settings.rest_order >= 2
-    a0 = b.var("a0", (1, 1), 0.0 if rest else -np.inf, 0.0 if rest else np.inf, 0.0)
-    a_lb, a_ub = np.full((n, d), -np.inf), np.full((n, d), np.inf)
-    if rest:
-        a_lb[-1, -1] = a_ub[-1, -1] = 0.0
-    Acol = b.var("A", (n, d), a_lb, a_ub, a_nodes[:, 1:])
-    x = MoveVariables(mesh, S, V, a0, Acol)
-    b.constrain("collocation", x.defects(), 0.0, 0.0)
-    z = b.var("z", (1, 1), 0.0, np.inf, 60.0)
-    j = x.hull("j")
-    b.constrain("epigraph", ca.vertcat(ca.vec(z - j), ca.vec(z + j)), 0.0, np.inf)
-    ctx = _Context(problem, settings, mesh, [mv], [x], b)
-    sol, stats = _solve_nlp(ctx, z, dict(DEFAULT_SOLVER_OPTIONS))
-    return float(sol["f"]) * mv.j_scale
+_MEASURE_OF = {"min_peak_torque": "peak_torque_N_m", "min_rms_torque": "rms_torque_N_m", "min_energy": "energy",
+               "min_peak_accel": "a_max_m_s2", "min_accel_squared": "accel_squared", "min_jerk": "jerk_squared"}
+
+
+def compare_with_laws(design: "Design", laws=None) -> list[dict]:
+    """The optimal stroke against classic laws on the same timing and drive (motor and pulley of the design).
+
+    ``laws``: MotionLaw objects (default: every classic law, the problem's own law with its parameters).
+    Each row: law, peak acceleration and jerk, integrals, peak and RMS torque (with a drive), and
+    ``vs_optimal_pct``: how much larger the law's value of the design's objective measure is.
+    """
+    from .laws import LAW_NAMES
+
+    problem = design.problem
+    if laws is None:
+        own = problem.default_law
+        laws = [own if name == own.name else make_law(name) for name in LAW_NAMES]
+    measure = _MEASURE_OF.get(design.objective)
+    opt = {"law": "optimal", **_stroke_measures(design, design.stroke)}
+    rows = [opt]
+    for law in laws:
+        stroke = problem.with_law(law).stroke(design.spm)
+        rows.append({"law": law.label, **_stroke_measures(design, stroke)})
+    for r in rows:
+        base = opt.get(measure) if measure else None
+        val = r.get(measure) if measure else None
+        r["vs_optimal_pct"] = (100.0 * (val / base - 1.0) if base and val is not None and math.isfinite(val)
+                               else None)
+    return rows
+
+
+def design_text(design: "Design", comparison: list[dict] | None = None) -> str:
+    """A readable account of a design: choices, objective, moves, checks with margins, active constraints."""
+    from .report import format_table, format_value
+
+    lines = [f"{design.problem.name}: optimal stroke at {design.spm:g} spm ({design.status}, "
+             f"{design.solve_time_s:.2f} s, mesh {design.mesh.intervals} x degree {design.mesh.degree})",
+             f"objective {design.objective}: {format_value(design.objective_value)} {design.objective_unit}"]
+    if design.motor is not None:
+        lines.append(f"motor {design.motor}; pulley {design.pulley_teeth} teeth, pitch diameter "
+                     f"{design.pitch_diameter * 1e3:.2f} mm")
+    lines.append("")
+    lines.append(format_table([m.to_dict() for m in design.moves],
+                              [("index", "move"), ("name", "interval"), ("stroke_mm", "stroke mm"),
+                               ("duration_s", "time s"), ("v_max_m_s", "v_max m/s"), ("a_max_m_s2", "a_max m/s2"),
+                               ("jerk_max_m_s3", "jerk_max m/s3"), ("C_a", "C_a")]))
+    if design.checks:
+        lines.append("")
+        lines.append(format_table(design.checks, [("name", "check"), ("value", "value"), ("limit", "limit"),
+                                                  ("unit", "unit"), ("margin", "margin"), ("ok", "ok")],
+                                  title="checks (fine grid between collocation nodes; margin = 1 - value/limit)"))
+    lines.append("")
+    lines.append("active constraints: " + ("; ".join(design.active_constraints) or "none"))
+    if comparison:
+        cols = [("law", "stroke"), ("a_max_m_s2", "a_max m/s2"), ("jerk_max_m_s3", "jerk_max m/s3")]
+        if "peak_torque_N_m" in comparison[0]:
+            cols += [("peak_torque_N_m", "peak torque N m"), ("rms_torque_N_m", "RMS torque N m")]
+        cols.append(("vs_optimal_pct", f"{design.objective} vs optimal %"))
+        lines.append("")
+        motor = f" with {design.motor}, {design.pulley_teeth} teeth" if design.motor else ""
+        lines.append(format_table(comparison, cols, title=f"comparison with the classic laws{motor}"))
+    for note in design.notes:
+        lines.append(f"note: {note}")
+    return "\n".join(lines)
