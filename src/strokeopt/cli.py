@@ -321,6 +321,79 @@ def cmd_verify(args) -> int:
     return 0
 
 
+def cmd_solve(args) -> int:
+    from .design import (OBJECTIVES, compare_with_laws, design_summary, design_text, fastest_feasible, mesh_study,
+                         solve_design, sweep_spm)
+    from .plots import plot_design_sweep, plot_kinematics, plot_mesh_study
+    from .report import format_table, to_json
+
+    sweep = None
+    if args.spm is not None and ":" in args.spm:
+        parts = args.spm.split(":")
+        if len(parts) != 3:
+            raise ProblemError("--spm", "", f"expected N or START:STOP:STEP, got {args.spm!r}")
+        start, stop, step = (_spm_value(x) for x in parts)
+        if stop < start:
+            raise ProblemError("--spm", "", f"STOP {stop:g} is below START {start:g}")
+        sweep = [start + k * step for k in range(int((stop - start) / step + 1e-9) + 1)]
+        args.spm = None
+    if args.objective is not None and args.objective not in OBJECTIVES:
+        raise ProblemError("--objective", "", f"{args.objective!r} is not one of {', '.join(OBJECTIVES)}")
+    problem = _load(args)
+    progress = None
+    if not args.json:
+        from tqdm import tqdm
+
+        progress = lambda it, desc="solve": tqdm(it, desc=desc, unit="solve", file=sys.stderr, leave=False)  # noqa: E731
+    if args.study == "mesh":
+        rows = mesh_study(problem, objective=args.objective, progress=progress and (lambda it: progress(it, "mesh")))
+        if args.json:
+            print(to_json({"problem": problem.name, "spm": problem.spm, "study": "mesh", "rows": rows}))
+        else:
+            print(f"{problem.name} at {problem.spm:g} spm: the same design on each mesh (file's motor and pulley); "
+                  f"error against the last (finest) mesh")
+            print(format_table(rows, [("intervals", "intervals"), ("degree", "degree"), ("variables", "variables"),
+                                      ("objective_value", "objective"), ("objective_error_pct", "error %"),
+                                      ("violation_between_nodes", "violation between nodes"),
+                                      ("time_s", "time s")]))
+        _write_figure(lambda p: plot_mesh_study(rows, p), _plot_path(args, "mesh_study"), args)
+        return 0
+    if sweep is not None:
+        rows = sweep_spm(problem, sweep, objective=args.objective,
+                         progress=progress and (lambda it: progress(it, "spm")))
+        best = fastest_feasible(rows)
+        if args.json:
+            print(to_json({"problem": problem.name, "objective": args.objective or
+                           (problem.design.objective if problem.design else None), "rows": rows,
+                           "fastest_feasible_spm": best}))
+        else:
+            print(format_table(rows, [("spm", "spm"), ("feasible", "feasible"), ("objective_value", "objective"),
+                                      ("motor", "motor"), ("pulley_teeth", "z"), ("peak_torque_N_m", "peak N m"),
+                                      ("rms_torque_N_m", "RMS N m"), ("solve_time_s", "time s"),
+                                      ("reason", "why not")],
+                               title=f"{problem.name}: optimal design over the stitch rate (warm-started)"))
+            print(f"\nfastest feasible stitch rate: {best:g} spm" if best is not None
+                  else "\nno feasible stitch rate in the sweep")
+        _write_figure(lambda p: plot_design_sweep(rows, p), _plot_path(args, "solve_sweep"), args)
+        return 0
+    design = solve_design(problem, objective=args.objective, verbose=args.verbose)
+    comparison = compare_with_laws(design)
+    if args.json:
+        print(to_json({**design_summary(design), "comparison": comparison}))
+    else:
+        print(design_text(design, comparison))
+    if args.out is not None:
+        written = design.write(args.out)
+        law_stroke = problem.stroke(design.spm)
+        fig_path = Path(args.out) / "stroke.png"
+        _write_figure(lambda p: plot_kinematics(problem, [design.stroke, law_stroke], design.spm, p), fig_path, args)
+        for path in written:
+            print(f"written {path}", file=sys.stderr if args.json else sys.stdout)
+    _write_figure(lambda p: plot_kinematics(problem, [design.stroke, problem.stroke(design.spm)], design.spm, p),
+                  _plot_path(args, "solve"), args)
+    return 0
+
+
 def _simulation_arguments(p) -> None:
     p.add_argument("--scene", help="scene of the problem file ([scenes.NAME]; default: release, else the first)")
     p.add_argument("--method", default="cvodes", choices=("cvodes", "idas"), help="SUNDIALS integrator (default cvodes)")
@@ -385,6 +458,29 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--explain", action="store_true", help="torque breakdown at the peak and every check's margin")
     p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_sizing.png; 'none' for no figure)")
     p.set_defaults(run=cmd_size)
+
+    p = sub.add_parser("solve", parents=[problem], help="optimal stroke, pulley and motor by direct collocation",
+                       description="Solve the design problem of the file ([design], [drive]): the stroke of every move "
+                                   "between its fixed dwells by direct collocation (IPOPT), with the pulley radius "
+                                   "(continuous, then the nearest catalogue tooth counts) and the motor (enumerated "
+                                   "or Bonmin) as decisions. Prints the motor, pulley, objective, every check with its "
+                                   "margin, the active constraints and a comparison with the classic laws on the same "
+                                   "drive. --spm START:STOP:STEP sweeps the stitch rate (warm-started) and prints the "
+                                   "fastest feasible rate; --study mesh prints what accuracy costs in time. "
+                                   "Objectives: min_peak_torque, min_rms_torque, min_energy, min_peak_accel, "
+                                   "min_accel_squared, min_jerk, min_snap.",
+                       epilog="Examples: strokeopt solve problems/deco2000_needle_bar.toml; "
+                              "strokeopt solve problems/deco2000_needle_bar.toml --spm 600 --out out/; "
+                              "strokeopt solve problems/deco2000_needle_bar.toml --spm 400:900:50; "
+                              "strokeopt solve problems/known_optima/min_jerk.toml")
+    p.add_argument("--objective", help="objective (overrides design.objective of the file)")
+    p.add_argument("--spm", help="stitches per minute, or a sweep START:STOP:STEP (default: machine.spm of the file)")
+    p.add_argument("--out", metavar="DIR", help="write design.json, cam_table.csv (0.1 deg) and stroke.png into DIR")
+    p.add_argument("--study", choices=("mesh",), help="'mesh': objective error, violation between nodes and time "
+                                                      "over mesh sizes and collocation degrees")
+    p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_solve.png; "
+                                                  "'none' for no figure)")
+    p.set_defaults(run=cmd_solve)
 
     p = sub.add_parser("bench", help="speed benchmarks, each against a reference measured in the same run",
                        description="Run the registered benchmarks (strokeopt/bench.py): each times a capability "

@@ -1498,13 +1498,13 @@ def _report_checks(best: _Outcome, design: "Design") -> tuple[list[dict], list[s
             value = row["jerk_max_fine_m_s3"]
             checks.append({"name": f"jerk move {mv.index}", "value": value, "limit": mv.jerk_bound, "unit": "m/s^3",
                            "margin": 1.0 - value / mv.jerk_bound,
-                           "ok": value <= mv.jerk_bound * (1 + ctx.settings.check_tolerance)})
+                           "ok": bool(value <= mv.jerk_bound * (1 + ctx.settings.check_tolerance))})
     checks += list(best.fine.get("drive_checks", []))
     for name, value in ctx.extra.get("handover_terms", []):
         v = float(value) if isinstance(value, (int, float)) else float(_value(ctx, value, best.x).item())
         acc = ctx.settings.accuracy
         checks.append({"name": f"handover accuracy ({name})", "value": v * 1e3, "limit": acc * 1e3, "unit": "mm",
-                       "margin": 1.0 - v / acc, "ok": v <= acc})
+                       "margin": 1.0 - v / acc, "ok": bool(v <= acc)})
     active = []
     # active limit groups: the largest scaled residual of each group within 1e-4 of its bound
     for (lim, _), g in zip(ctx.built.limits, _limit_values(ctx, best.x)):
@@ -1664,3 +1664,102 @@ def design_text(design: "Design", comparison: list[dict] | None = None) -> str:
     for note in design.notes:
         lines.append(f"note: {note}")
     return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------- sweeps and studies
+
+
+def design_summary(design: "Design") -> dict:
+    """The JSON report of ``strokeopt solve``: the fields scripts rely on, then the details."""
+    checks = {c["name"]: c for c in design.checks}
+    out = {
+        "status": design.status,
+        "objective": design.objective,
+        "objective_value": design.objective_value,
+        "objective_unit": design.objective_unit,
+        "motor": design.motor,
+        "pulley_teeth": design.pulley_teeth,
+        "spm": design.spm,
+        "peak_torque_N_m": checks["peak_torque"]["value"] if "peak_torque" in checks else None,
+        "rms_torque_N_m": checks["rms_torque"]["value"] if "rms_torque" in checks else None,
+        "moves": [{"index": m.index, "v_max_m_s": m.v_max, "a_max_m_s2": m.a_max, "jerk_max_m_s3": m.jerk_max,
+                   "C_a": m.C_a, "duration_s": m.duration, "stroke_mm": m.stroke * 1e3} for m in design.moves],
+        "active_constraints": design.active_constraints,
+        "solve_time_s": design.solve_time_s,
+    }
+    full = design.summary()
+    for key in ("problem", "problem_file", "cycle_time_s", "pulley_pitch_diameter_mm", "mesh", "checks",
+                "iterations", "notes"):
+        out[key] = full[key]
+    return out
+
+
+def sweep_spm(problem, spms, *, objective: str | None = None, settings: DesignSettings | None = None,
+              progress=None) -> list[dict]:
+    """Solve at each stitch rate in ``spms`` (ascending), each solve warm-started from the previous.
+
+    Returns one row per rate: ``spm``, ``feasible``, the objective, motor, pulley, peak and RMS torque,
+    and for an infeasible rate the reason. ``progress``: a callable wrapping the iterable (tqdm).
+    """
+    rows = []
+    warm = None
+    it = progress(list(spms)) if progress is not None else list(spms)
+    for spm in it:
+        t0 = time.perf_counter()
+        try:
+            d = solve_design(problem, objective=objective, spm=spm, settings=settings, warm_start=warm)
+        except SolverError as exc:
+            rows.append({"spm": float(spm), "feasible": False, "reason": exc.reason,
+                         "solve_time_s": time.perf_counter() - t0})
+            continue
+        warm = d
+        s = design_summary(d)
+        rows.append({"spm": float(spm), "feasible": True, "objective_value": d.objective_value,
+                     "motor": d.motor, "pulley_teeth": d.pulley_teeth, "peak_torque_N_m": s["peak_torque_N_m"],
+                     "rms_torque_N_m": s["rms_torque_N_m"],
+                     "a_max_m_s2": max(m.a_max for m in d.moves), "solve_time_s": time.perf_counter() - t0})
+    return rows
+
+
+def fastest_feasible(rows: list[dict]) -> float | None:
+    """The highest stitch rate of a sweep below which every rate was feasible (None: the first failed)."""
+    best = None
+    for r in sorted(rows, key=lambda r: r["spm"]):
+        if not r["feasible"]:
+            break
+        best = r["spm"]
+    return best
+
+
+#: Meshes of the accuracy/time study: (intervals, degree); the last is the reference.
+STUDY_MESHES = ((10, 2), (20, 2), (40, 2), (10, 3), (20, 3), (40, 3), (80, 3), (160, 4))
+
+
+def mesh_study(problem, *, objective: str | None = None, spm: float | None = None,
+               settings: DesignSettings | None = None, meshes=STUDY_MESHES, progress=None) -> list[dict]:
+    """What accuracy costs in time: the same design on each mesh against the last (finest) one.
+
+    The parts are held fixed (the file's motor and pulley) so the study sees the discretisation
+    only. Rows: intervals, degree, variables, objective, its error against the reference [%],
+    the largest relative violation of a bound between collocation nodes (fine grid), solve time.
+    """
+    settings = replace(settings or getattr(problem, "design", None) or DesignSettings(),
+                       motor_choice="fixed", pulley="fixed" if getattr(problem, "drive", None) else "fixed",
+                       refinements=0)
+    rows = []
+    it = progress(list(meshes)) if progress is not None else list(meshes)
+    for n, d in it:
+        _SOLVERS.clear()  # every mesh is timed with its build
+        t0 = time.perf_counter()
+        design = solve_design(problem, objective=objective, spm=spm, settings=settings, mesh=Mesh(n, d))
+        elapsed = time.perf_counter() - t0
+        nodes = n * (d + 1) + 2 * (n + 1)
+        rows.append({"intervals": n, "degree": d, "variables": nodes * len(design.moves),
+                     "objective_value": design.objective_value,
+                     "violation_between_nodes": float(design.fine_grid["worst_relative_violation"]),
+                     "time_s": elapsed})
+    ref = rows[-1]["objective_value"]
+    for r in rows:
+        r["objective_error_pct"] = 100.0 * abs(r["objective_value"] / ref - 1.0) if ref else None
+    rows[-1]["reference"] = True
+    return rows
