@@ -1540,7 +1540,7 @@ def _diagnose(problem, spm, settings, mesh, objective, drive, choice, status, op
     x = np.asarray(sol["x"]).ravel()
     worst = None
     for lim, slack in ctx.built.limits:
-        sig = float(_value(ctx, slack, x)) if slack is not None else 0.0
+        sig = float(_value(ctx, slack, x).item()) if slack is not None else 0.0
         if sig > 1e-6 and (worst is None or sig > worst[1]):
             worst = (lim, sig)
     if worst is None:
