@@ -179,3 +179,68 @@ def test_default_settings_without_a_servo_section(reference):
     assert ServoSettings().position_sampling == reference.servo.position_sampling
     res = handover_accuracy(bare, spm=500)
     assert 0 < res.handover_error < 0.5e-3
+
+
+# --------------------------------------------------------------------------- the design constraint and the trade-off
+
+
+def test_error_kernel_reproduces_the_simulation(setup):
+    # the linear functional the design uses equals the loop simulation with a continuous reference
+    import strokeopt.servo as servo
+
+    problem, settings, axis, gains = setup
+    stroke = problem.stroke(600)
+    kernel = servo.error_kernel(axis, settings, gains, stroke.period)
+    sch = problem.timing.schedule(600)
+    t_h = sch.t_start[1] + sch.duration[1]
+    continuous = replace(settings, control_cycle=10e-6)
+    sim = handover_accuracy(problem, stroke, 600, settings=continuous, axis=replace(axis, load=None), gains=gains)
+    assert kernel.error_at(stroke, t_h) == pytest.approx(sim.at_handover(sim.error), rel=0.02)
+
+
+def test_servo_term_is_registered_in_the_design():
+    from strokeopt import design
+    from strokeopt.servo import servo_handover_error
+
+    assert servo_handover_error in design.HANDOVER_ERROR_TERMS
+    assert design.HANDOVER_ERROR_TERMS.count(servo_handover_error) == 1
+
+
+@pytest.mark.slow
+def test_design_with_the_accuracy_constraint_resimulates_within_it(setup):
+    # issue acceptance: a design solved with "handover error <= 0.5 mm", re-simulated with the
+    # full loop model (table sampling, load forces, worst table phase), meets 0.5 mm; and a tight
+    # 0.05 mm constraint (active in the design) holds in the re-simulation within the table effects
+    from strokeopt.design import DesignSettings, solve_design
+
+    problem, settings, axis, gains = setup
+    base = replace(problem.design or DesignSettings(), motor_choice="fixed", pulley="fixed")
+    loose = solve_design(problem, spm=600, settings=replace(base, accuracy=0.5e-3))
+    check = next(c for c in loose.checks if c["name"].startswith("handover accuracy (servo"))
+    assert check["ok"] and check["value"] <= 0.5
+    res = handover_accuracy(problem, loose.stroke, 600, settings=settings, axis=axis, gains=gains)
+    assert res.handover_error <= 0.5e-3 and not res.torque_limited
+    # the design's own figure and the simulation agree to the table effects
+    assert res.at_handover(res.error) * 1e3 == pytest.approx(check["value"] - res.quantisation * 1e3, abs=0.02)
+
+    tight = solve_design(problem, spm=600, settings=replace(base, accuracy=0.05e-3), warm_start=loose)
+    check = next(c for c in tight.checks if c["name"].startswith("handover accuracy (servo"))
+    assert check["value"] <= 0.05 * (1 + 1e-6)
+    res = handover_accuracy(problem, tight.stroke, 600, settings=settings, axis=axis, gains=gains)
+    assert abs(res.at_handover(res.error)) + res.quantisation <= 0.05e-3 + 0.01e-3
+
+
+def test_tradeoff_classic_is_monotone_and_names_its_limit(reference):
+    from strokeopt.servo import tradeoff_classic
+
+    pts = tradeoff_classic(reference, [0.03e-3, 0.06e-3, 0.1e-3, 1.0e-3], resolution=40, step=150)
+    assert [p.accuracy for p in pts] == sorted(p.accuracy for p in pts)
+    rates = [p.max_spm or 0.0 for p in pts]
+    assert all(a <= b for a, b in zip(rates, rates[1:])), rates
+    assert all(p.binding for p in pts)
+    # tight accuracy: the handover error binds; loose accuracy: a drive limit binds
+    assert pts[1].binding == "handover_accuracy" and pts[1].max_spm is not None
+    assert pts[-1].binding != "handover_accuracy"
+    for p in pts:
+        if p.max_spm is not None and p.binding == "handover_accuracy":
+            assert p.handover_error <= p.accuracy

@@ -13,6 +13,11 @@ The data flow::
         -> Scene simulation   contact model as data; a scene's     model.py, scene.py,
                               CasADi ODE, CVODES over one cycle:   simulate.py
                               impact, lag, gap N, needle release
+        -> Servo loop         cascade position/speed loop, belt    servo.py
+                              as a spring (python-control):
+                              handover error and its causes; the
+                              design's servo accuracy term; the
+                              accuracy / stitch-rate trade-off
         -> Report             tables, JSON, plots                  report.py, plots.py
 
 ``cli.py`` ties these together; notebooks and tests use the same public API
@@ -27,6 +32,8 @@ from .laws import LAW_NAMES, Characteristics, MotionLaw, law_table, make_law
 from .model import Body, Element, ForceLaw, Model
 from .problem import Problem, load_problem
 from .scene import Scene, make_scene
+from .servo import (AccuracyResult, DriveAxis, ServoSettings, accuracy_report, axis_from_problem, handover_accuracy,
+                    tradeoff)
 from .simulate import SceneResult, SimulationOptions, simulate_scene, sweep_spm, tolerance_study
 from .stroke import Kinematics, Piece, StrokeFunction
 from .timing import Interval, TimingDiagram
@@ -40,5 +47,7 @@ __all__ = [
     "gt3_pitch_diameter", "law_table", "load_problem", "make_law",
     "Belt", "Catalogue", "Check", "DriveLimits", "DriveSpec", "Load", "LoadForce", "Pulley", "ScrewLever", "ServoMotor",
     "SliderCrank", "drive_checks", "load_catalogue", "load_torque", "optimal_radius", "size_drive",
+    "AccuracyResult", "DriveAxis", "ServoSettings", "accuracy_report", "axis_from_problem", "handover_accuracy",
+    "tradeoff",
 ]
 __version__ = "0.1.0"

@@ -217,6 +217,36 @@ def cmd_accuracy(args) -> int:
     return 0
 
 
+def cmd_tradeoff(args) -> int:
+    from .report import to_json
+    from .servo import plot_tradeoff, tradeoff, tradeoff_text
+
+    problem = _load(args)
+    accuracies = None
+    if args.accuracies:
+        try:
+            accuracies = [float(x) * 1e-3 for x in args.accuracies.split(",")]
+        except ValueError:
+            raise ProblemError("--accuracies", "", f"expected comma-separated millimetres, got {args.accuracies!r}") from None
+        if not all(a > 0 and a != float("inf") for a in accuracies):
+            raise ProblemError("--accuracies", "", f"every accuracy must be positive, got {args.accuracies!r}")
+    if not args.resolution > 0:
+        raise ProblemError("--resolution", "", f"must be positive, got {args.resolution!r}")
+    progress = None
+    if not args.json:
+        from tqdm import tqdm
+
+        def progress(items):
+            return tqdm(items, desc="tradeoff", file=sys.stderr, leave=False)
+    report = tradeoff(problem, accuracies, strokes=args.strokes, resolution=args.resolution, progress=progress)
+    if args.json:
+        print(to_json(report))
+    else:
+        print(tradeoff_text(report))
+    _write_figure(lambda p: plot_tradeoff(report, p), _plot_path(args, "tradeoff"), args)
+    return 0
+
+
 def _sim_options(args):
     from .simulate import SimulationOptions
 
@@ -545,6 +575,22 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also report handover error and residual vibration of every classic law")
     p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_accuracy.png; 'none' for no figure)")
     p.set_defaults(run=cmd_accuracy)
+
+    p = sub.add_parser("tradeoff", parents=[problem], help="what accuracy costs: highest stitch rate per handover accuracy",
+                       description="For required handover accuracies (default 0.02 to 1 mm) find the highest stitch "
+                                   "rate at which the handover error (strokeopt accuracy) and every drive limit still "
+                                   "hold, with the problem's classic law and, separately, with the optimal stroke "
+                                   "(strokeopt solve with the accuracy constraint, on the problem's motor and pulley); "
+                                   "each point names its binding limit. The optimal stroke needs one design solve "
+                                   "per trial rate: it takes minutes.",
+                       epilog="Example: strokeopt tradeoff problems/deco2000_needle_bar.toml --strokes classic "
+                              "--accuracies 0.05,0.1,0.5")
+    p.add_argument("--accuracies", metavar="MM,MM,...", help="required accuracies in mm (default 0.02,0.03,0.05,0.1,0.2,0.3,0.5,1)")
+    p.add_argument("--strokes", choices=("both", "classic", "optimal"), default="both",
+                   help="which strokes to compare (default both)")
+    p.add_argument("--resolution", type=float, default=10.0, help="stitch-rate resolution of the search [spm] (default 10)")
+    p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_tradeoff.png; 'none' for no figure)")
+    p.set_defaults(run=cmd_tradeoff)
     return parser
 
 

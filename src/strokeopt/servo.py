@@ -470,6 +470,7 @@ class AccuracyResult:
     loop: ServoLoop
     label: str = ""
     residual_window: tuple[float, float] = (0.0, 0.0)
+    error_load: np.ndarray | None = None  # bar error caused by the external forces alone [m]
 
     @property
     def error(self) -> np.ndarray:
@@ -728,7 +729,8 @@ def handover_accuracy(problem, stroke=None, spm: float | None = None, *, setting
         theta, stretch, x, tau_cmd = outputs[2 * i]
         results.append(AccuracyResult(spm, stroke.period, t, s_cmd, x, s_cmd - axis.radius * theta, stretch,
                                       outputs[2 * i + 1][1], tau_cmd, t_h, int(np.searchsorted(t, t_h)), quant,
-                                      axis.torque_limit, loop, label or stroke.label, window))
+                                      axis.torque_limit, loop, label or stroke.label, window,
+                                      -outputs[2 * i + 1][2]))
     return max(results, key=lambda r: r.handover_error)
 
 
@@ -870,3 +872,407 @@ def accuracy_text(report: dict) -> str:
             ("peak_torque_command_N_m", "peak torque N m"), ("torque_limited", "saturates")],
             title=f"Motion laws at {report['spm']:g} spm on the same drive")]
     return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------- the design constraint
+
+
+@dataclass(frozen=True)
+class ErrorKernel:
+    """The bar error at one instant as a linear functional of the stroke's acceleration.
+
+    For the periodic steady state of the loop (continuous reference, no
+    table sampling), ``e(t) = integral over one cycle of K_T(t - sigma) a(sigma) d sigma``
+    with ``K_T`` the derivative of the error's response to a unit step of
+    acceleration, folded onto one period. ``tau`` and ``values`` sample ``K_T``
+    on ``[0, period]``.
+    """
+
+    period: float
+    delay: float
+    tau: np.ndarray
+    values: np.ndarray
+
+    def __call__(self, tau) -> np.ndarray:
+        return np.interp(np.mod(tau, self.period), self.tau, self.values)
+
+    def error_at(self, stroke, t: float, points: int = 20001) -> float:
+        """``e(t + delay)`` for a stroke (numeric check of the functional)."""
+        sigma = np.linspace(0.0, self.period, points)
+        a = stroke.evaluate(sigma).a
+        return float(np.trapezoid(self(t + self.delay - sigma) * a, sigma))
+
+
+_KERNELS: dict = {}
+
+
+def error_kernel(axis: DriveAxis, settings: ServoSettings, gains: Gains, period: float) -> ErrorKernel:
+    """The :class:`ErrorKernel` of a loop for a cycle of ``period`` seconds (cached)."""
+    import control
+
+    key = (axis, settings, gains, round(period, 12))
+    if key in _KERNELS:
+        return _KERNELS[key]
+    loop = build_loop(replace(axis, load=None), settings, gains)
+    slowest = float(np.min(-loop.poles.real))
+    horizon = max(period, 12.0 / slowest)
+    step = min(settings.position_sampling / 25, period / 4000)
+    t = np.arange(0.0, horizon + step, step)
+    d = settings.sum_small_time_constants
+    r = axis.radius
+    td = np.clip(t - d, 0.0, None)
+    s_ref = td**2 / 2  # the bar position commanded by a unit step of acceleration at t = 0, as the loop sees it
+    u = np.vstack([s_ref / r, td / r, axis.total_inertia / r * np.ones_like(t), 0 * t])
+    x = np.asarray(control.forced_response(loop.system, t, u).outputs)[2]
+    e_step = s_ref - x
+    k = np.gradient(e_step, t)
+    n_per = int(round(period / step))
+    tau = t[: n_per + 1]
+    folded = np.zeros(n_per + 1)
+    for start in range(0, len(t), n_per):
+        chunk = k[start: start + n_per + 1]
+        folded[: len(chunk)] += chunk
+    if len(_KERNELS) > 32:
+        _KERNELS.pop(next(iter(_KERNELS)))
+    _KERNELS[key] = ErrorKernel(period, d, tau, folded)
+    return _KERNELS[key]
+
+
+#: Gauss-Legendre points per mesh interval for the error functional in the design.
+KERNEL_POINTS = 6
+
+
+def servo_handover_error(ctx):
+    """Handover error term of the design (``design.HANDOVER_ERROR_TERMS``): the bar's error at the
+    end of the handover move from the servo loop and the belt, ``|e_motion + e_load| + one count``.
+
+    ``e_motion`` is exact for the linear loop (continuous reference): a linear
+    functional of the move accelerations (:class:`ErrorKernel`), the weights
+    entering the NLP as parameters, so a solver built for one speed serves
+    another. ``e_load`` (the load forces: springs, gravity) is taken from the
+    simulation of the problem's classic stroke at the same speed. With a
+    continuous pulley radius or a motor choice the kernel is that of the
+    problem's own pulley and motor (an approximation; re-check the result with
+    ``strokeopt accuracy``). None when the problem has no ``[servo]`` section.
+    """
+    import casadi as ca
+
+    problem = ctx.problem
+    settings = getattr(problem, "servo", None)
+    if settings is None or ctx.drive is None or not ctx.moves or "spm" not in ctx.extra:
+        return None
+    spm = float(ctx.extra["spm"])
+    timing = problem.timing
+    move_h = timing.handover_move
+    if move_h is None:
+        return None
+    choice = ctx.choice
+    motor = choice.motor if choice is not None and choice.motor is not None else None
+    teeth = choice.teeth if choice is not None and choice.teeth is not None else problem.pulley_teeth
+    axis = axis_from_problem(problem, settings, motor=motor, pulley_teeth=teeth)
+    gains = _tuned(axis, settings)
+    sch = timing.schedule(spm)
+    period = float(sch.period)
+    kernel = error_kernel(axis, settings, gains, period)
+    t_h = float(sch.t_start[move_h.index - 1] + sch.duration[move_h.index - 1])
+    # the instants checked: the end of the handover move and WINDOW_POINTS more over the handover window
+    t_check = t_h + np.linspace(0.0, settings.handover_window / 360.0 * period, WINDOW_POINTS + 1)
+    x_q, w_q = np.polynomial.legendre.leggauss(KERNEL_POINTS)
+    x_q, w_q = (x_q + 1) / 2, w_q / 2
+    b = ctx.built
+    n = ctx.mesh.intervals
+    errors = 0
+    for k, mv in enumerate(ctx.moves):
+        t0 = float(sch.t_start[mv.interval - 1])
+        dur = float(sch.duration[mv.interval - 1])
+        sigma = (t0 + (np.arange(n).reshape(-1, 1) + x_q.reshape(1, -1)) * dur / n).ravel(order="F")
+        w = np.tile(w_q, (n, 1)).ravel(order="F") * dur / n
+        weights = kernel(t_check.reshape(-1, 1) + kernel.delay - sigma.reshape(1, -1)) * w.reshape(1, -1)
+        w_sym = _vector_param(b, f"servo kernel move {mv.index}", weights)
+        a = ca.vec(ctx.si(k, x_q, "a"))  # column-major: the same order as sigma
+        errors = errors + ca.mtimes(w_sym, a)
+    load = b.param("servo load error", _load_error(problem, settings, axis, gains, spm))
+    quant = b.param("servo encoder count", 2 * math.pi * axis.radius / settings.encoder_counts)
+    e = errors + load
+    return "servo loop and belt (servo.py)", ca.mmax(ca.sqrt(e**2 + 1e-14)) + quant
+
+
+#: Instants after the end of the handover move checked in the design (over the handover window).
+WINDOW_POINTS = 5
+
+
+def _vector_param(built, name: str, values: np.ndarray):
+    """A matrix of numbers entering the NLP as parameters (one built solver serves other speeds)."""
+    import casadi as ca
+
+    values = np.atleast_2d(np.asarray(values, dtype=float))
+    sym = ca.MX.sym(name, values.size)
+    built.p.append(sym)
+    built.pvals.extend(values.ravel(order="F").tolist())
+    return ca.reshape(sym, values.shape[0], values.shape[1])
+
+
+_TUNED: dict = {}
+_LOAD_ERRORS: dict = {}
+
+
+def _tuned(axis: DriveAxis, settings: ServoSettings) -> Gains:
+    key = (axis, settings)
+    if key not in _TUNED:
+        _TUNED[key] = tune(axis, settings)
+    return _TUNED[key]
+
+
+def _load_error(problem, settings: ServoSettings, axis: DriveAxis, gains: Gains, spm: float) -> float:
+    """Bar error at the end of the handover move caused by the load forces alone (classic stroke, this speed)."""
+    key = (id(problem), axis, settings, gains, spm)
+    if key not in _LOAD_ERRORS:
+        if axis.load is None:
+            _LOAD_ERRORS[key] = 0.0
+        else:
+            res = handover_accuracy(problem, spm=spm, settings=settings, axis=axis, gains=gains)
+            _LOAD_ERRORS[key] = res.at_handover(res.error_load)
+    return _LOAD_ERRORS[key]
+
+
+def _register_design_term() -> None:
+    from . import design
+
+    if servo_handover_error not in design.HANDOVER_ERROR_TERMS:
+        design.HANDOVER_ERROR_TERMS.append(servo_handover_error)
+
+
+_register_design_term()
+
+
+# --------------------------------------------------------------------------- what accuracy costs in time
+
+#: Required handover accuracies of the trade-off [mm].
+DEFAULT_ACCURACIES_MM = (0.02, 0.03, 0.05, 0.1, 0.2, 0.3, 0.5, 1.0)
+
+
+@dataclass
+class TradeoffPoint:
+    accuracy: float  # m
+    stroke: str  # "modified_sine" (the problem's law) or "optimal"
+    max_spm: float | None
+    binding: str
+    handover_error: float | None = None  # m, at max_spm
+    detail: str = ""
+
+    def as_dict(self) -> dict:
+        return {"accuracy_mm": self.accuracy * 1e3, "stroke": self.stroke, "max_spm": self.max_spm,
+                "binding": self.binding,
+                "handover_error_mm": None if self.handover_error is None else self.handover_error * 1e3,
+                "detail": self.detail}
+
+
+def _bisect(ok, lo: float, hi: float, resolution: float) -> float:
+    """Largest x in [lo, hi) with ok(x), given ok(lo) and not ok(hi)."""
+    while hi - lo > resolution:
+        mid = 0.5 * (lo + hi)
+        if ok(mid):
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step: float = 50.0,
+                     lowest: float = 100.0, progress=None) -> list[TradeoffPoint]:
+    """Highest stitch rate with the problem's classic law for each required handover accuracy [m].
+
+    A rate is feasible when every sizing check of the problem's motor and
+    pulley passes (drive.py), the servo's torque command stays within its
+    limit, the sampling is shorter than every move, and the handover error is
+    at most the accuracy *at this rate and at every lower one* (so the curve
+    is monotone by definition: the error need not rise strictly with speed).
+    The binding limit is the one that fails just above the highest rate.
+    """
+    from .drive import max_spm as drive_max_spm
+
+    accuracies = sorted(a * 1e-3 for a in DEFAULT_ACCURACIES_MM) if accuracies is None else sorted(accuracies)
+    settings = problem.servo or ServoSettings(file=str(problem.file))
+    axis = axis_from_problem(problem, settings)
+    gains = _tuned(axis, settings)
+    spec = problem.drive
+    cat = spec.catalogue()
+    motor = cat.motor(spec.motor, (spec.file, "drive.motor"))
+    pulley = next(p for p in cat.pulleys_of(spec.profile) if p.teeth == problem.pulley_teeth)
+    kin = problem.stroke().sample(3601)
+    drive_max, drive_binding = drive_max_spm(kin, problem.spm, motor, pulley, spec.load, spec.limits,
+                                             spec.belt_spec(cat), resolution=1.0)
+    drive_max = drive_max or 0.0
+    # the sampling: the shortest move must stay longer than a control cycle
+    sch = problem.timing.schedule(problem.spm)
+    move = min(d for itv, d in zip(problem.timing.intervals, sch.duration) if itv.is_move)
+    sampling_max = problem.spm * move / max(settings.control_cycle, settings.position_sampling)
+    cache: dict = {}
+
+    def evaluate(spm: float):
+        spm = round(spm, 6)
+        if spm not in cache:
+            res = handover_accuracy(problem, spm=spm, settings=settings, axis=axis, gains=gains)
+            cache[spm] = (res.handover_error, res.torque_limited)
+        return cache[spm]
+
+    top = min(drive_max, sampling_max * (1 - 1e-9))
+    top_binding = drive_binding if drive_max <= sampling_max else "sampling"
+    grid = list(np.arange(lowest, top, step)) + [top]
+    it = progress(grid) if progress else grid
+    errors = []
+    for spm in it:
+        e, sat = evaluate(spm)
+        errors.append((spm, e, sat))
+    points = []
+    best = None
+    for acc in accuracies:
+        def ok(x, acc=acc):
+            e, sat = evaluate(x)
+            return e <= acc and not sat
+        prev = None
+        fail = None
+        for spm, e, sat in errors:
+            if e <= acc and not sat:
+                prev = spm
+            else:
+                fail = (spm, "torque_limit" if sat else "handover_accuracy")
+                break
+        if fail is None:
+            max_spm, binding = top, top_binding
+        elif prev is None:
+            max_spm, binding = None, fail[1]
+        else:
+            max_spm = _bisect(ok, prev, fail[0], resolution)
+            e_hi, sat_hi = evaluate(min(max_spm + resolution, fail[0]))
+            binding = "torque_limit" if sat_hi else "handover_accuracy"
+        if best is not None and (max_spm is None or max_spm < best):
+            max_spm = best  # the error stays within a looser accuracy wherever it met a tighter one
+        if max_spm is not None:
+            max_spm = math.floor(max_spm / resolution) * resolution if max_spm != top else math.floor(top)
+            best = max_spm
+        err = evaluate(max_spm)[0] if max_spm else None
+        points.append(TradeoffPoint(acc, problem.default_law.name, max_spm, binding, err))
+    return points
+
+
+def _binding_of(reason: str) -> str:
+    text = reason.lower()
+    for key, name in (("handover accuracy", "handover_accuracy"), ("rms", "rms_torque"), ("peak torque", "peak_torque"),
+                      ("speed", "peak_speed"), ("belt", "belt_tension"), ("jerk", "jerk"), ("inertia", "inertia_ratio")):
+        if key in text:
+            return name
+    return "solver"
+
+
+def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowest: float = 100.0,
+                     start: float | None = None, progress=None) -> list[TradeoffPoint]:
+    """Highest stitch rate with the optimal stroke (``design.solve_design`` with the handover
+    accuracy constraint, which includes :func:`servo_handover_error`) for each accuracy [m].
+
+    Bisection on the rate, one design solve per trial (warm-started); the
+    binding limit is the constraint the solve names when it fails just above
+    the highest rate. Tighter accuracies are solved first; a looser accuracy
+    starts from the rate the tighter one reached (the curve is monotone). The
+    motor and pulley are the problem's (``drive.motor``, ``pulley_teeth``), as
+    for the classic law, so the two curves compare strokes on one drive.
+    """
+    from .design import DesignSettings, solve_design
+
+    accuracies = sorted(a * 1e-3 for a in DEFAULT_ACCURACIES_MM) if accuracies is None else sorted(accuracies)
+    base = problem.design or DesignSettings()
+    start = problem.spm if start is None else start
+    points = []
+    lo_known = None
+    warm = None
+    it = progress(accuracies) if progress else accuracies
+    for acc in it:
+        # the same drive as the classic law: the problem's motor and pulley
+        settings = replace(base, accuracy=acc, motor_choice="fixed", pulley="fixed")
+        reasons: dict = {}
+
+        def ok(spm, settings=settings):
+            nonlocal warm
+            try:
+                d = solve_design(problem, spm=spm, settings=settings, warm_start=warm)
+            except SolverError as exc:
+                reasons[round(spm, 6)] = exc.reason
+                return False
+            warm = d
+            return True
+
+        lo = lo_known if lo_known is not None else None
+        if lo is None:
+            x = start
+            while x >= lowest and not ok(x):
+                x /= 1.5
+            lo = x if x >= lowest else None
+        if lo is None:
+            reason = reasons.get(round(x * 1.5, 6), "")
+            points.append(TradeoffPoint(acc, "optimal", None, _binding_of(reason), None, reason))
+            continue
+        hi = lo * 1.25
+        while ok(hi):
+            lo, hi = hi, hi * 1.25
+        max_spm = math.floor(_bisect(ok, lo, hi, resolution) / resolution) * resolution
+        fail_reason = reasons.get(min(reasons, key=lambda k: abs(k - max_spm)), "") if reasons else ""
+        points.append(TradeoffPoint(acc, "optimal", max_spm, _binding_of(fail_reason), None, fail_reason))
+        lo_known = max_spm
+    return points
+
+
+def tradeoff(problem, accuracies=None, *, strokes: str = "both", resolution: float = 10.0,
+             progress=None) -> dict:
+    """The report of ``strokeopt tradeoff``: for each required handover accuracy the highest
+    stitch rate with the problem's classic law and with the optimal stroke, and the binding limit."""
+    if strokes not in ("both", "classic", "optimal"):
+        raise ProblemError("--strokes", "", f"{strokes!r} is not one of both, classic, optimal")
+    points = []
+    if strokes in ("both", "classic"):
+        points += tradeoff_classic(problem, accuracies, resolution=resolution, progress=progress)
+    if strokes in ("both", "optimal"):
+        points += tradeoff_optimal(problem, accuracies, resolution=resolution, progress=progress)
+    return {"problem": problem.name, "motor": problem.drive.motor, "pulley_teeth": problem.pulley_teeth,
+            "law": problem.default_law.label, "resolution_spm": resolution,
+            "points": [p.as_dict() for p in points]}
+
+
+def tradeoff_text(report: dict) -> str:
+    from .report import format_table
+
+    head = (f"{report['problem']}: highest stitch rate for a required handover accuracy "
+            f"(motor {report['motor']}, {report['pulley_teeth']}-tooth pulley; classic law {report['law']}; "
+            f"rates to {report['resolution_spm']:g} spm)")
+    return head + "\n\n" + format_table(report["points"], [
+        ("accuracy_mm", "accuracy mm"), ("stroke", "stroke"), ("max_spm", "max spm"), ("binding", "binding limit"),
+        ("handover_error_mm", "error at max mm")])
+
+
+def plot_tradeoff(report: dict, path: str | Path | None = None):
+    """Highest stitch rate over the required handover accuracy, one line per stroke, binding limits marked."""
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
+    markers = {"handover_accuracy": "o", "torque_limit": "s", "peak_torque": "s", "overload": "s",
+               "rms_torque": "D", "peak_speed": "^", "sampling": "v"}
+    for kind in dict.fromkeys(p["stroke"] for p in report["points"]):
+        pts = [p for p in report["points"] if p["stroke"] == kind and p["max_spm"] is not None]
+        if not pts:
+            continue
+        x = [p["accuracy_mm"] for p in pts]
+        y = [p["max_spm"] for p in pts]
+        line, = ax.plot(x, y, lw=1.4, label=kind)
+        for p in pts:
+            ax.plot(p["accuracy_mm"], p["max_spm"], markers.get(p["binding"], "x"), color=line.get_color())
+            ax.annotate(p["binding"], (p["accuracy_mm"], p["max_spm"]), xytext=(4, -10), textcoords="offset points",
+                        fontsize=7, color=line.get_color())
+    ax.set_xscale("log")
+    ax.set_xlabel("required handover accuracy [mm]")
+    ax.set_ylabel("highest stitch rate [spm]")
+    ax.set_title(f"{report['problem']}: what accuracy costs in stitch rate")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig
