@@ -11,7 +11,7 @@ import pytest
 from strokeopt import ProblemError, SolverError, load_problem
 from strokeopt.collocation import Mesh, MoveSolution
 from strokeopt.design import (DesignSettings, compare_with_laws, fastest_feasible, read_design, solve_design,
-                              sweep_spm)
+                              sweep_design)
 from strokeopt.drive import drive_checks
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -193,7 +193,7 @@ def test_sweep_warm_starts_and_finds_the_fastest_feasible_rate():
     p = load_problem(KNOWN / "jerk_bounded_peak_accel.toml", ["design.jerk_max_from_law=false",
                                                               "design.jerk_max_m_s3=60"])
     # the rise of 1 m takes 30/spm s; 32 h/T^3 <= 60 holds up to spm = 30 * (60/32)^(1/3) = 37.0
-    rows = sweep_spm(p, [30, 33, 36, 39, 42])
+    rows = sweep_design(p, [30, 33, 36, 39, 42])
     assert [r["feasible"] for r in rows] == [True, True, True, False, False]
     assert fastest_feasible(rows) == 36
     assert "jerk bound needs" in rows[3]["reason"]

@@ -8,6 +8,9 @@ The data flow::
         -> StrokeFunction     s, v, a, jerk as CasADi Functions:   laws.py, stroke.py
                               a classic law or a collocation
                               solution
+        -> Design             direct collocation of every move:   design.py,
+                              optimal stroke, pulley and motor,    collocation.py
+                              constraint report, design.json
         -> Drive              transmission + motor + load: torque, transmission.py,
                               speed, checks; catalogue sizing      actuators.py, drive.py
         -> Scene simulation   contact model as data; a scene's     model.py, scene.py,
@@ -27,6 +30,9 @@ exported here.
 from .actuators import Belt, Catalogue, Pulley, ServoMotor, load_catalogue
 from .drive import (Check, DriveLimits, DriveSpec, Load, LoadForce, drive_checks, load_torque, optimal_radius,
                     size_drive)
+from .collocation import Mesh
+from .design import (OBJECTIVES, Design, DesignSettings, compare_with_laws, mesh_study, read_design, solve_design,
+                     sweep_design)
 from .errors import ProblemError, SolverError, StrokeoptError
 from .laws import LAW_NAMES, Characteristics, MotionLaw, law_table, make_law
 from .model import Body, Element, ForceLaw, Model
@@ -47,6 +53,8 @@ __all__ = [
     "gt3_pitch_diameter", "law_table", "load_problem", "make_law",
     "Belt", "Catalogue", "Check", "DriveLimits", "DriveSpec", "Load", "LoadForce", "Pulley", "ScrewLever", "ServoMotor",
     "SliderCrank", "drive_checks", "load_catalogue", "load_torque", "optimal_radius", "size_drive",
+    "OBJECTIVES", "Design", "DesignSettings", "Mesh", "compare_with_laws", "mesh_study", "read_design",
+    "solve_design", "sweep_design",
     "AccuracyResult", "DriveAxis", "ServoSettings", "accuracy_report", "axis_from_problem", "handover_accuracy",
     "tradeoff",
 ]

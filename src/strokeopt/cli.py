@@ -353,7 +353,7 @@ def cmd_verify(args) -> int:
 
 def cmd_solve(args) -> int:
     from .design import (OBJECTIVES, compare_with_laws, design_summary, design_text, fastest_feasible, mesh_study,
-                         solve_design, sweep_spm)
+                         solve_design, sweep_design)
     from .plots import plot_design_sweep, plot_kinematics, plot_mesh_study
     from .report import format_table, to_json
 
@@ -389,7 +389,7 @@ def cmd_solve(args) -> int:
         _write_figure(lambda p: plot_mesh_study(rows, p), _plot_path(args, "mesh_study"), args)
         return 0
     if sweep is not None:
-        rows = sweep_spm(problem, sweep, objective=args.objective,
+        rows = sweep_design(problem, sweep, objective=args.objective,
                          progress=progress and (lambda it: progress(it, "spm")))
         best = fastest_feasible(rows)
         if args.json:

@@ -1694,7 +1694,7 @@ def design_summary(design: "Design") -> dict:
     return out
 
 
-def sweep_spm(problem, spms, *, objective: str | None = None, settings: DesignSettings | None = None,
+def sweep_design(problem, spms, *, objective: str | None = None, settings: DesignSettings | None = None,
               progress=None) -> list[dict]:
     """Solve at each stitch rate in ``spms`` (ascending), each solve warm-started from the previous.
 
