@@ -1221,7 +1221,7 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
     return points
 
 
-def tradeoff(problem, accuracies=None, *, strokes: str = "both", resolution: float = 10.0,
+def tradeoff(problem, accuracies=None, *, strokes: str = "both", resolution: float = 10.0, step: float = 50.0,
              progress=None) -> dict:
     """The report of ``strokeopt tradeoff``: for each required handover accuracy the highest
     stitch rate with the problem's classic law and with the optimal stroke, and the binding limit."""
@@ -1229,7 +1229,8 @@ def tradeoff(problem, accuracies=None, *, strokes: str = "both", resolution: flo
         raise ProblemError("--strokes", "", f"{strokes!r} is not one of both, classic, optimal")
     points = []
     if strokes in ("both", "classic"):
-        points += tradeoff_classic(problem, accuracies, resolution=resolution, progress=progress)
+        points += tradeoff_classic(problem, accuracies, resolution=resolution, step=max(step, resolution),
+                                   progress=progress)
     if strokes in ("both", "optimal"):
         points += tradeoff_optimal(problem, accuracies, resolution=resolution, progress=progress)
     return {"problem": problem.name, "motor": problem.drive.motor, "pulley_teeth": problem.pulley_teeth,
