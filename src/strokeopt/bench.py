@@ -95,6 +95,7 @@ def best_time(fn: Callable[[], object], repeat: int = 5) -> float:
 def _load_all() -> None:
     """Import the modules that register benchmarks outside this one."""
     from . import simulate  # noqa: F401  (simulate_release)
+    from . import design  # noqa: F401  (design_resolve, design_reference, design_expand_jit, design_vs_rockit)
 
 
 def run_benchmarks(only: list[str] | None = None) -> list[BenchResult]:
