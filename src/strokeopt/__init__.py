@@ -31,8 +31,8 @@ from .actuators import Belt, Catalogue, Pulley, ServoMotor, load_catalogue
 from .drive import (Check, DriveLimits, DriveSpec, Load, LoadForce, drive_checks, load_torque, optimal_radius,
                     size_drive)
 from .collocation import Mesh
-from .design import (OBJECTIVES, Design, DesignSettings, compare_with_laws, mesh_study, read_design, solve_design,
-                     sweep_design)
+from .design import (OBJECTIVES, Design, DesignSettings, compare_with_laws, design_text, mesh_study, read_design,
+                     solve_design, sweep_design)
 from .errors import ProblemError, SolverError, StrokeoptError
 from .laws import LAW_NAMES, Characteristics, MotionLaw, law_table, make_law
 from .model import Body, Element, ForceLaw, Model
@@ -53,7 +53,7 @@ __all__ = [
     "gt3_pitch_diameter", "law_table", "load_problem", "make_law",
     "Belt", "Catalogue", "Check", "DriveLimits", "DriveSpec", "Load", "LoadForce", "Pulley", "ScrewLever", "ServoMotor",
     "SliderCrank", "drive_checks", "load_catalogue", "load_torque", "optimal_radius", "size_drive",
-    "OBJECTIVES", "Design", "DesignSettings", "Mesh", "compare_with_laws", "mesh_study", "read_design",
+    "OBJECTIVES", "Design", "DesignSettings", "Mesh", "compare_with_laws", "design_text", "mesh_study", "read_design",
     "solve_design", "sweep_design",
     "AccuracyResult", "DriveAxis", "ServoSettings", "accuracy_report", "axis_from_problem", "handover_accuracy",
     "tradeoff",
