@@ -12,7 +12,8 @@ parts with files of the same form (``load_catalogue(extra_files=[...])`` or
     [[pulley]]           name, profile, teeth, inertia_kg_cm2 (optional, else the model)
     [inertia_model.<profile>]   kind = "power_law", source
     [[belt]]             name, profile, width_mm, width_factor,
-                         breaking_tension_glass_N, breaking_tension_steel_N
+                         breaking_tension_glass_N, breaking_tension_steel_N,
+                         tensile_stiffness_glass_N, tensile_stiffness_steel_N (optional, EA)
     [belt_method.<profile>]     source, reference_width_mm, grooves, allowable_tension_N,
                                 peak_tension_factor, breaking_safety
 
@@ -137,6 +138,7 @@ class Belt:
     width: float
     width_factor: float
     breaking_tension: dict = field(default_factory=dict)  # cord -> N
+    tensile_stiffness: dict = field(default_factory=dict)  # cord -> EA [N per unit strain] (servo.py's belt spring)
 
 
 @dataclass(frozen=True)
@@ -313,7 +315,9 @@ def load_catalogue(extra_files=(), builtin: bool = True) -> Catalogue:
             cat.belts[name] = Belt(
                 name, profile, row.number("width_mm", positive=True) * 1e-3, row.number("width_factor", positive=True),
                 {cord: row.number(f"breaking_tension_{cord}_N", positive=True) for cord in BELT_CORDS
-                 if row.has(f"breaking_tension_{cord}_N")})
+                 if row.has(f"breaking_tension_{cord}_N")},
+                {cord: row.number(f"tensile_stiffness_{cord}_N", positive=True) for cord in BELT_CORDS
+                 if row.has(f"tensile_stiffness_{cord}_N")})
             if not cat.belts[name].breaking_tension:
                 raise row.error("breaking_tension_glass_N", "a belt needs at least one breaking tension "
                                                             "(breaking_tension_glass_N or breaking_tension_steel_N)")

@@ -12,7 +12,8 @@ The model (python-control, continuous time, linear):
 
   ``F_ext`` is gravity and the load forces of the problem's ``[drive]``
   (the bar's springs), evaluated along the commanded stroke.
-* **Belt stiffness**: the carrier is clamped in one span; the driving pulley
+* **Belt stiffness** (``EA`` from the belt catalogue, ``tensile_stiffness_glass_N``:
+  an estimate, see ``catalogue/gt3_belts.toml``): the carrier is clamped in one span; the driving pulley
   pulls it through the span piece of length ``l1`` (pulley to carrier) and,
   the other way round, through the rest of the loop ``l2 = belt length -
   l1 - half the pulley's wrap``; both pieces are pretensioned springs in
@@ -68,11 +69,12 @@ from .errors import ProblemError, SolverError
 CONTRIBUTIONS = ("servo_tracking", "belt_stretch", "encoder_quantisation")
 TUNING_RULES = ("symmetric_optimum", "manual")
 
-#: GT3 glass-cord belt, tensile stiffness per mm of width [N per unit strain].
-#: Estimate, not a maker's figure: breaking tension of the 9 mm belt 1990 N
-#: (digest A.4) over an elongation at break of 4 % for glass cord
-#: -> EA = 49.75 kN for 9 mm, 5.5 kN per mm of width. A maker's value given in the
-#: catalogue (``specific_stiffness_N`` of a belt) or in ``[servo]`` replaces it.
+#: GT3 glass-cord belt, tensile stiffness per mm of width [N per unit strain], for a
+#: belt without catalogue data. Estimate, not a maker's figure: breaking tension of the
+#: 9 mm belt 1990 N (digest A.4) over an elongation at break of 4 % for glass cord
+#: -> EA = 49.75 kN for 9 mm, 5.5 kN per mm of width. The catalogue belts carry the same
+#: estimate as ``tensile_stiffness_glass_N``; ``[servo] belt_specific_stiffness_N_per_mm``
+#: replaces both.
 GT3_GLASS_SPECIFIC_STIFFNESS_N_PER_MM = 5500.0
 
 
@@ -257,18 +259,26 @@ def axis_from_problem(problem, settings: ServoSettings | None = None, *, motor=N
         radius, j_pulley = pulley.radius, pulley.inertia
     else:
         j_pulley = float(catalogue.pulley_inertia(drive.profile, 2 * radius))
+    # EA of the belt: [servo] belt_specific_stiffness_N_per_mm (x width) if given, else the catalogue
+    # belt's tensile_stiffness for the drive's cord, else the glass-cord estimate per mm of width
     width = settings.belt_width
-    stiff = settings.belt_specific_stiffness
-    note = "[servo] belt_specific_stiffness_N_per_mm"
+    ea, note = None, ""
+    if settings.belt_specific_stiffness is not None:
+        ea, note = None, "[servo] belt_specific_stiffness_N_per_mm"
     if drive.belt is not None:
         belt = catalogue.belt(drive.belt, (file, "drive.belt"))
         width = belt.width
-        if stiff is None and getattr(belt, "specific_stiffness", None):
-            stiff, note = belt.specific_stiffness, f"catalogue belt {belt.name}"
-    if stiff is None:
-        stiff = GT3_GLASS_SPECIFIC_STIFFNESS_N_PER_MM * 1e3
-        note = "estimate for GT3 glass cord (breaking tension / 4 % elongation)"
-    k = belt_stiffness(stiff, width, settings.belt_span, settings.carrier_from_pulley, settings.belt_length, 2 * radius)
+        if settings.belt_specific_stiffness is None and drive.belt_cord in belt.tensile_stiffness:
+            ea = belt.tensile_stiffness[drive.belt_cord]
+            note = f"catalogue belt {belt.name}, {drive.belt_cord} cord"
+    if ea is None:
+        if settings.belt_specific_stiffness is not None:
+            ea = settings.belt_specific_stiffness * width
+        else:
+            ea = GT3_GLASS_SPECIFIC_STIFFNESS_N_PER_MM * 1e3 * width
+            note = "estimate for GT3 glass cord (breaking tension / 4 % elongation)"
+    k = belt_stiffness(ea / width, width, settings.belt_span, settings.carrier_from_pulley, settings.belt_length,
+                       2 * radius)
     j = motor.rotor_inertia + j_pulley
     m = drive.load.moving_mass
     m_red = 1 / (1 / m + radius**2 / j)
