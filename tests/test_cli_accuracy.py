@@ -82,3 +82,31 @@ def test_sampling_longer_than_the_move_at_a_higher_spm(capsys, write_problem):
     path = write_problem(lambda t: t.replace("position_sampling_us = 250 ", "position_sampling_us = 5000 "))
     assert main(["accuracy", str(path), "--spm", "1200", "--plot", "none"]) == 2
     assert "servo.position_sampling_us" in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------------- strokeopt tradeoff
+
+
+def test_tradeoff_classic_json_and_plot(capsys, reference_path, tmp_path):
+    fig = tmp_path / "trade.png"
+    assert main(["tradeoff", str(reference_path), "--strokes", "classic", "--accuracies", "0.06,0.5",
+                 "--resolution", "100", "--json", "--plot", str(fig)]) == 0
+    out, err = capsys.readouterr()
+    data = json.loads(out)
+    pts = data["points"]
+    assert [p["accuracy_mm"] for p in pts] == pytest.approx([0.06, 0.5])
+    assert all(p["stroke"] == "modified_sine" and p["binding"] for p in pts)
+    assert pts[0]["max_spm"] <= pts[1]["max_spm"]  # a looser accuracy never costs stitch rate
+    assert pts[0]["binding"] == "handover_accuracy"
+    assert fig.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--accuracies", "0.1,abc"], "--accuracies"),
+    (["--accuracies", "0.1,-0.2"], "positive"),
+    (["--resolution", "0"], "--resolution"),
+])
+def test_tradeoff_bad_options_exit_2(capsys, reference_path, args, words):
+    assert main(["tradeoff", str(reference_path), "--strokes", "classic", "--plot", "none", *args]) == 2
+    err = capsys.readouterr().err
+    assert words in err and "Traceback" not in err
