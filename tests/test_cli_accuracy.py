@@ -110,3 +110,25 @@ def test_tradeoff_bad_options_exit_2(capsys, reference_path, args, words):
     assert main(["tradeoff", str(reference_path), "--strokes", "classic", "--plot", "none", *args]) == 2
     err = capsys.readouterr().err
     assert words in err and "Traceback" not in err
+
+
+@pytest.mark.slow
+def test_accuracy_with_an_optimal_design(capsys, reference, reference_path, tmp_path):
+    # the residual vibration of the optimal stroke next to the classic laws (issue scope 3)
+    from dataclasses import replace
+
+    from strokeopt.design import DesignSettings, solve_design
+
+    settings = replace(reference.design or DesignSettings(), motor_choice="fixed", pulley="fixed", mesh_intervals=20)
+    design = solve_design(reference, spm=600, settings=settings)
+    design.write(tmp_path)
+    path = tmp_path / "design.json"
+    assert main(["accuracy", str(reference_path), "--design", str(path), "--json", "--plot", "none"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["spm"] == 600 and len(data["laws"]) == 8
+    optimal = data["laws"][-1]
+    assert optimal["law"].startswith("optimal") and 0 < optimal["handover_error_mm"] < 0.5
+    assert optimal["residual_vibration_mm"] >= 0
+    # a design solved at another rate is refused, naming the file
+    assert main(["accuracy", str(reference_path), "--design", str(path), "--spm", "500", "--plot", "none"]) == 2
+    assert str(path) in capsys.readouterr().err

@@ -201,14 +201,25 @@ def cmd_accuracy(args) -> int:
     from .report import to_json
     from .servo import accuracy_report, accuracy_text
 
+    extra = []
+    if args.design:
+        from .design import read_design
+
+        data, optimal = read_design(args.design)
+        if args.spm is not None and abs(_spm_value(args.spm) - float(data["spm"])) > 1e-9:
+            raise ProblemError(args.design, "spm", f"the design was solved at {data['spm']:g} spm, not at {args.spm} "
+                                                   "spm: omit --spm or solve the design at that rate")
+        args.spm = str(data["spm"])
+        extra = [(f"optimal ({data.get('objective', 'design')})", optimal)]
     problem = _load(args)
     progress = None
-    if args.compare_laws and not args.json:
+    if (args.compare_laws or extra) and not args.json:
         from tqdm import tqdm
 
         def progress(items):
             return tqdm(items, desc="laws", unit="law", file=sys.stderr, leave=False)
-    report, result = accuracy_report(problem, problem.spm, compare_laws=args.compare_laws, progress=progress)
+    report, result = accuracy_report(problem, problem.spm, compare_laws=args.compare_laws or bool(extra),
+                                     extra_strokes=extra, progress=progress)
     if args.json:
         print(to_json(report))
     else:
@@ -573,6 +584,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--chi", type=float, help="shape parameter chi of the modified sine law (0 < chi <= 0.25)")
     p.add_argument("--compare-laws", action="store_true",
                    help="also report handover error and residual vibration of every classic law")
+    p.add_argument("--design", metavar="DESIGN_JSON",
+                   help="add the optimal stroke of a design.json (strokeopt solve --out) to the law comparison, "
+                        "at the rate it was solved for")
     p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_accuracy.png; 'none' for no figure)")
     p.set_defaults(run=cmd_accuracy)
 
