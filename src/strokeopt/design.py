@@ -794,6 +794,19 @@ def static_belt_deflection(ctx: _Context):
 HANDOVER_ERROR_TERMS: list = [static_belt_deflection]
 
 
+#: Weight of the jerk-squared regularisation added to epigraph (peak) objectives.
+SMOOTHING = 1e-7
+
+
+def _smoothing(ctx: _Context):
+    """A tiny integral of jerk squared (unit form, relative to the 3-4-5 law's 720 per move).
+
+    A peak objective is set by one move; without this the moves that do not set the peak could
+    take any feasible shape. It changes the peak by far less than the solver tolerance matters.
+    """
+    return SMOOTHING * sum(x.integral("j") for x in ctx.vars) / 720.0
+
+
 def _objective(ctx: _Context, objective: str):
     """The scaled objective expression; records in ctx.extra how to turn it back into SI."""
     moves, xs, b = ctx.moves, ctx.vars, ctx.built
@@ -804,7 +817,8 @@ def _objective(ctx: _Context, objective: str):
             a = (abs(mv.stroke) / T**2 / a_ref) * x.hull("a")  # bounds the acceleration everywhere, not only at the nodes
             b.constrain(f"peak accel epigraph move {mv.index}", ca.vertcat(ca.vec(z - a), ca.vec(z + a)), 0.0, np.inf)
         ctx.extra.update(scale=a_ref, unit="m/s^2", transform=lambda f: f * a_ref)
-        return z
+        ctx.extra["objective_expr"] = z
+        return z + _smoothing(ctx)
     if objective in ("min_accel_squared", "min_jerk", "min_snap"):
         kind, power = {"min_accel_squared": ("a", 3), "min_jerk": ("j", 5), "min_snap": ("snap", 7)}[objective]
         # integral over the move of (stroke/T^p * y^(k))^2 dt = stroke^2 / T^(2p-1) * integral over unit time
@@ -836,7 +850,8 @@ def _objective(ctx: _Context, objective: str):
             tau_d = ca.vertcat(*ctx.extra["dwell_torques"])
             b.constrain("peak torque epigraph dwells", ca.vertcat(Z[-1] - tau_d, Z[-1] + tau_d), 0.0, np.inf)
         ctx.extra.update(unit="N m", transform=lambda f: f * tau_ref)
-        return Z[0]
+        ctx.extra["objective_expr"] = Z[0]
+        return Z[0] + _smoothing(ctx)
     if objective == "min_rms_torque":
         ctx.extra.update(unit="N m", transform=lambda f: math.sqrt(max(f, 0.0)) * tau_ref)
         return ctx.extra["mean_sq"]
@@ -1241,6 +1256,12 @@ _ENFORCED = {"peak_torque", "overload", "rms_torque", "peak_speed", "belt_width"
 _PIN_ITERATIONS = 5
 
 
+def _objective_value(ctx: _Context, sol, x) -> float:
+    """The objective without the smoothing term (scaled)."""
+    expr = ctx.extra.get("objective_expr")
+    return float(sol["f"]) if expr is None else float(_value(ctx, expr, x).item())
+
+
 def _same_time(a, b, tol: float = 1e-6) -> bool:
     return (a is None and b is None) or (a is not None and b is not None and abs(a - b) <= tol)
 
@@ -1287,7 +1308,7 @@ def _solve_one(problem, spm, settings, mesh, objective, warm, drive, choice, opt
                                         settings.check_points)
             over = [max(0.0, -c.margin) for c in checks if c.name in _ENFORCED and math.isfinite(c.margin)]
             if objective == "min_peak_torque":  # the epigraph held at the nodes; the fine grid reads the peak
-                nlp_peak = ctx.extra["transform"](float(sol["f"]))
+                nlp_peak = ctx.extra["transform"](_objective_value(ctx, sol, x))
                 fine_peak = next(c.value for c in checks if c.name == "peak_torque")
                 fine["peak_torque_nodes_N_m"] = nlp_peak
                 fine["peak_torque_fine_N_m"] = fine_peak
@@ -1299,7 +1320,7 @@ def _solve_one(problem, spm, settings, mesh, objective, warm, drive, choice, opt
             break
         mesh = Mesh(mesh.intervals * 2, mesh.degree)
         warm = None
-    value = ctx.extra["transform"](float(sol["f"]))
+    value = ctx.extra["transform"](_objective_value(ctx, sol, x))
     return _Outcome(ctx, x, sols, value, "optimal" if status == "Solve_Succeeded" else "acceptable", total_time,
                     iterations, fine, radius, motor)
 
