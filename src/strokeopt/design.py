@@ -27,7 +27,7 @@ and by ``strokeopt verify``)::
 
     {
       "format": "strokeopt-design", "version": 1,
-      "problem_file": "<path as given>", "problem": "<name>",
+      "problem_file": "<absolute path>", "problem": "<name>",
       "spm": 600.0, "cycle_time_s": ..., "objective": "min_peak_torque",
       "objective_value": ..., "objective_unit": "N m",
       "status": "optimal", "motor": "<name or null>", "pulley_teeth": 28,
@@ -1033,7 +1033,7 @@ class Design:
         return {
             "status": self.status,
             "problem": self.problem.name,
-            "problem_file": str(self.problem.file),
+            "problem_file": str(Path(self.problem.file).resolve()),
             "objective": self.objective,
             "objective_value": self.objective_value,
             "objective_unit": self.objective_unit,
