@@ -26,17 +26,26 @@ The model (python-control, continuous time, linear):
   sees the sample-and-hold (``T_p/2``), one sample of computation
   (``T_p``) and the current loop (time constant ``T_i``), together the
   sum of small time constants ``T_sigma``, represented by a Pade
-  approximation inside the loop. The reference comes from the position
-  table every control cycle ``T_c`` = 500 us; the feed-forwards are its
-  backward differences, which lag the position reference by ``T_c/2``
-  (speed) and ``T_c`` (acceleration); these delays act outside the loop
-  and are applied exactly.
+  approximation inside the loop. The position table is read every control
+  cycle ``T_c`` = 500 us (rounded so that a whole number of table points
+  fills the stitch cycle) and interpolated linearly; the speed
+  feed-forward is the table's difference quotient held over the cycle,
+  the torque feed-forward ``J_tot eps - r F_ext`` (``eps`` the table's
+  second difference; with ``load_feedforward`` the load forces too, as
+  the sizing computes them). The drive delays its position and speed
+  references by ``T_sigma`` so that they meet the feed-forward torque at
+  the motor; the error is measured against the stroke delayed by the same
+  ``T_sigma`` (a delay common to both synchronised bars). Where the table
+  points fall relative to the stroke is chance: the result is the worst of
+  :data:`TABLE_PHASES`.
 * **Tuning rule** (default gains, not fitted to any measurement): the
   symmetric optimum for the speed loop on the rigid total inertia
   ``J_tot = J + m r^2``: crossover ``w_c = 1/(2 T_sigma)``, ``Kv = J_tot w_c``,
   ``Ti = 4 T_sigma = 2/w_c``; the position loop closed four times slower,
-  ``Kp = w_c/4``. Giving ``speed_bandwidth_Hz`` replaces ``w_c``; giving
-  the three gains replaces the rule.
+  ``Kp = w_c/4``; ``w_c`` then lowered (bisection) until the loop with the
+  belt mode keeps a gain margin of 2 and a modulus margin of 0.5. Giving
+  ``speed_bandwidth_Hz`` replaces ``w_c``; ``tuning = "manual"`` with the
+  three gains replaces the rule.
 * **Torque limit**: ``min(motor peak torque, drive peak limit x rated
   torque)``. The model is linear: where the torque command exceeds the
   limit the prediction does not hold, and the result says so
@@ -52,7 +61,17 @@ further by superposition into its parts due to the bar's inertia and due
 to the external forces.
 
 Results are the periodic steady state of the loop (found exactly from the
-state transition over one cycle), not a start-up transient.
+state transition over one cycle), not a start-up transient. The handover
+error is the largest bar error over ``handover_window_deg`` after the end of
+the handover move, plus one encoder count.
+
+Beyond the prediction (``strokeopt accuracy``):
+
+* :func:`servo_handover_error` is the servo's term of the design's handover
+  accuracy constraint (``design.HANDOVER_ERROR_TERMS``): the same loop as an
+  exact linear functional of the move accelerations (:class:`ErrorKernel`);
+* :func:`tradeoff` (``strokeopt tradeoff``): the highest stitch rate for each
+  required accuracy, classic law and optimal stroke, with the binding limit.
 """
 
 from __future__ import annotations
@@ -946,7 +965,8 @@ KERNEL_POINTS = 6
 
 def servo_handover_error(ctx):
     """Handover error term of the design (``design.HANDOVER_ERROR_TERMS``): the bar's error at the
-    end of the handover move from the servo loop and the belt, ``|e_motion + e_load| + one count``.
+    end of the handover move (:data:`WINDOW_POINTS`) from the servo loop and the belt,
+    ``|e_motion + e_load| + one count``.
 
     ``e_motion`` is exact for the linear loop (continuous reference): a linear
     functional of the move accelerations (:class:`ErrorKernel`), the weights
@@ -978,7 +998,8 @@ def servo_handover_error(ctx):
     kernel = error_kernel(axis, settings, gains, period)
     t_h = float(sch.t_start[move_h.index - 1] + sch.duration[move_h.index - 1])
     # the instants checked: the end of the handover move and WINDOW_POINTS more over the handover window
-    t_check = t_h + np.linspace(0.0, settings.handover_window / 360.0 * period, WINDOW_POINTS + 1)
+    t_check = t_h + np.linspace(0.0, settings.handover_window / 360.0 * period * (WINDOW_POINTS > 0),
+                                WINDOW_POINTS + 1)
     x_q, w_q = np.polynomial.legendre.leggauss(KERNEL_POINTS)
     x_q, w_q = (x_q + 1) / 2, w_q / 2
     b = ctx.built
@@ -999,8 +1020,11 @@ def servo_handover_error(ctx):
     return "servo loop and belt (servo.py)", ca.mmax(ca.sqrt(e**2 + 1e-14)) + quant
 
 
-#: Instants after the end of the handover move checked in the design (over the handover window).
-WINDOW_POINTS = 5
+#: Instants after the end of the handover move checked in the design, spread over the handover
+#: window. 0: the end of the move only. The maximum over several instants is not smooth and made
+#: IPOPT fail on tight accuracies (0.05 mm at 600 spm: iteration limit); ``strokeopt accuracy``
+#: re-checks the whole window.
+WINDOW_POINTS = 0
 
 
 def _vector_param(built, name: str, values: np.ndarray):
