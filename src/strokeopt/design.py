@@ -911,9 +911,36 @@ def _solve_nlp(ctx: _Context, f, options: dict):
         if len(_SOLVERS) >= _SOLVER_CACHE_SIZE:
             _SOLVERS.pop(next(iter(_SOLVERS)))
         _SOLVERS[key] = (ctx.problem, solver)
-    sol = solver(x0=np.concatenate(b.w0), lbx=np.concatenate(b.lbw), ubx=np.concatenate(b.ubw),
-                 lbg=np.concatenate(b.lbg), ubg=np.concatenate(b.ubg), p=np.array(b.pvals))
+    args = dict(x0=np.concatenate(b.w0), lbx=np.concatenate(b.lbw), ubx=np.concatenate(b.ubw),
+                lbg=np.concatenate(b.lbg), ubg=np.concatenate(b.ubg), p=np.array(b.pvals))
+    if plugin == "bonmin" and not options.get("ipopt.print_level", 0):
+        with _quiet_stdout():  # Bonmin's branch-and-bound log ignores its log-level options
+            sol = solver(**args)
+    else:
+        sol = solver(**args)
     return sol, solver.stats(), solver
+
+
+class _quiet_stdout:
+    """Silence the C-level stdout (file descriptor 1) for a block."""
+
+    def __enter__(self):
+        import os
+        import sys
+
+        sys.stdout.flush()
+        self._saved = os.dup(1)
+        self._null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(self._null, 1)
+        return self
+
+    def __exit__(self, *exc):
+        import os
+
+        os.dup2(self._saved, 1)
+        os.close(self._saved)
+        os.close(self._null)
+        return False
 
 
 def _value(ctx: _Context, expr, x: np.ndarray) -> np.ndarray:
