@@ -247,3 +247,14 @@ def test_tradeoff_classic_is_monotone_and_names_its_limit(reference):
     for p in pts:
         if p.max_spm is not None and p.binding == "handover_accuracy":
             assert p.handover_error <= p.accuracy
+
+
+@pytest.mark.slow
+def test_tradeoff_optimal_names_its_limit_and_resimulates(reference):
+    from strokeopt.servo import tradeoff_optimal
+
+    (pt,) = tradeoff_optimal(reference, [0.5e-3], resolution=100)
+    assert pt.stroke == "optimal" and pt.max_spm is not None and pt.max_spm >= 500
+    assert pt.binding != "solver" and pt.detail
+    # the design at the highest rate, re-simulated with the full loop model, meets the accuracy
+    assert pt.handover_error is not None and pt.handover_error <= 0.5e-3

@@ -1216,6 +1216,7 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
         # the same drive as the classic law: the problem's motor and pulley
         settings = replace(base, accuracy=acc, motor_choice="fixed", pulley="fixed")
         reasons: dict = {}
+        designs: dict = {}
 
         def ok(spm, settings=settings):
             nonlocal warm
@@ -1224,7 +1225,7 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
             except SolverError as exc:
                 reasons[round(spm, 6)] = exc.reason
                 return False
-            warm = d
+            warm = designs[spm] = d
             return True
 
         lo = lo_known if lo_known is not None else None
@@ -1240,9 +1241,17 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
         hi = lo * 1.25
         while ok(hi):
             lo, hi = hi, hi * 1.25
-        max_spm = math.floor(_bisect(ok, lo, hi, resolution) / resolution) * resolution
-        fail_reason = reasons.get(min(reasons, key=lambda k: abs(k - max_spm)), "") if reasons else ""
-        points.append(TradeoffPoint(acc, "optimal", max_spm, _binding_of(fail_reason), None, fail_reason))
+        found = _bisect(ok, lo, hi, resolution)
+        max_spm = math.floor(found / resolution) * resolution
+        fail_reason = reasons.get(min(reasons, key=lambda k: abs(k - found)), "") if reasons else ""
+        # re-simulate the design at the highest rate with the full loop model (table, load forces)
+        error, detail = None, fail_reason
+        if found in designs:
+            res = handover_accuracy(problem, designs[found].stroke, found)
+            error = res.handover_error
+            detail = f"at {found:.1f} spm the full simulation gives {error * 1e3:.4f} mm" + (
+                " (torque command beyond the limit)" if res.torque_limited else "") + "; above: " + fail_reason
+        points.append(TradeoffPoint(acc, "optimal", max_spm, _binding_of(fail_reason), error, detail))
         lo_known = max_spm
     return points
 
