@@ -253,7 +253,7 @@ def test_tradeoff_classic_is_monotone_and_names_its_limit(reference):
 def test_tradeoff_optimal_names_its_limit_and_resimulates(reference):
     from strokeopt.servo import tradeoff_optimal
 
-    (pt,) = tradeoff_optimal(reference, [0.5e-3], resolution=100)
+    (pt,) = tradeoff_optimal(reference, [0.5e-3], resolution=100, start=800)
     assert pt.stroke == "optimal" and pt.max_spm is not None and pt.max_spm >= 500
     assert pt.binding != "solver" and pt.detail
     # the design at the highest rate, re-simulated with the full loop model, meets the accuracy
