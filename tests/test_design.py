@@ -200,3 +200,15 @@ def test_sweep_warm_starts_and_finds_the_fastest_feasible_rate():
     # the acceleration coefficient grows as the jerk bound tightens
     c = [r["a_max_m_s2"] * (30 / r["spm"]) ** 2 for r in rows if r["feasible"]]
     assert c == sorted(c)
+
+
+@pytest.mark.slow
+def test_bonmin_and_enumeration_choose_the_same_motor(capfd):
+    # thesis 4.6 chose the 055U2B30 (smallest rotor inertia); both choosers agree, and Bonmin stays quiet
+    base = ['design.pulley="fixed"', "machine.spm=600", "design.mesh_intervals=20"]
+    enum = solve_design(load_problem(REFERENCE, base + ['design.motor_choice="enumerate"']))
+    bonmin = solve_design(load_problem(REFERENCE, base + ['design.motor_choice="bonmin"']))
+    assert enum.motor == bonmin.motor == "055U2B30"
+    assert bonmin.objective_value == pytest.approx(enum.objective_value, rel=1e-4)
+    assert any("Bonmin" in n for n in bonmin.notes)
+    assert capfd.readouterr().out == ""

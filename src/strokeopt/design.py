@@ -932,14 +932,26 @@ class _quiet_stdout:
         self._saved = os.dup(1)
         self._null = os.open(os.devnull, os.O_WRONLY)
         os.dup2(self._null, 1)
+        # CasADi routes part of its plugins' printing through Python's sys.stdout
+        self._py = sys.stdout
+        sys.stdout = open(os.devnull, "w")
         return self
 
     def __exit__(self, *exc):
+        import ctypes
         import os
+
+        try:  # C stdio buffers: flush them while fd 1 still points to /dev/null
+            ctypes.CDLL(None).fflush(None)
+        except (OSError, AttributeError):
+            pass
+        import sys
 
         os.dup2(self._saved, 1)
         os.close(self._saved)
         os.close(self._null)
+        sys.stdout.close()
+        sys.stdout = self._py
         return False
 
 
