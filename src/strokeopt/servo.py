@@ -1184,7 +1184,8 @@ def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step
 
 def _binding_of(reason: str) -> str:
     text = reason.lower()
-    for key, name in (("handover accuracy", "handover_accuracy"), ("rms", "rms_torque"), ("peak torque", "peak_torque"),
+    for key, name in (("handover accuracy", "handover_accuracy"), ("torque limit", "torque_limit"),
+                      ("rms", "rms_torque"), ("peak torque", "peak_torque"),
                       ("speed", "peak_speed"), ("belt", "belt_tension"), ("jerk", "jerk"), ("inertia", "inertia_ratio")):
         if key in text:
             return name
@@ -1196,9 +1197,12 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
     """Highest stitch rate with the optimal stroke (``design.solve_design`` with the handover
     accuracy constraint, which includes :func:`servo_handover_error`) for each accuracy [m].
 
-    Bisection on the rate, one design solve per trial (warm-started); the
-    binding limit is the constraint the solve names when it fails just above
-    the highest rate. Tighter accuracies are solved first; a looser accuracy
+    Bisection on the rate, one design solve per trial (warm-started). A rate
+    counts only when the design solves *and* its full simulation
+    (:func:`handover_accuracy`: table sampling, load forces, the handover
+    window) meets the accuracy without the torque command passing its limit:
+    the design's own term sees the end of the move with a continuous
+    reference only. The binding limit is what fails just above the highest rate. Tighter accuracies are solved first; a looser accuracy
     starts from the rate the tighter one reached (the curve is monotone). The
     motor and pulley are the problem's (``drive.motor``, ``pulley_teeth``), as
     for the classic law, so the two curves compare strokes on one drive.
@@ -1218,14 +1222,26 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
         reasons: dict = {}
         designs: dict = {}
 
-        def ok(spm, settings=settings):
+        def ok(spm, settings=settings, acc=acc):
             nonlocal warm
             try:
                 d = solve_design(problem, spm=spm, settings=settings, warm_start=warm)
             except SolverError as exc:
                 reasons[round(spm, 6)] = exc.reason
                 return False
-            warm = designs[spm] = d
+            warm = d
+            # the design's accuracy term is the loop with a continuous reference at the end of the move:
+            # the rate counts only if the full simulation (table, load forces, window) agrees
+            res = handover_accuracy(problem, d.stroke, spm)
+            if res.torque_limited:
+                reasons[round(spm, 6)] = (f"torque limit: the servo's torque command reaches "
+                                          f"{res.peak_torque_command:.2f} N m, limit {res.torque_limit:.2f} N m")
+                return False
+            if res.handover_error > acc:
+                reasons[round(spm, 6)] = (f"handover accuracy: the full simulation of the design gives "
+                                          f"{res.handover_error * 1e3:.4f} mm")
+                return False
+            designs[spm] = (d, res)
             return True
 
         lo = lo_known if lo_known is not None else None
@@ -1244,13 +1260,10 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
         found = _bisect(ok, lo, hi, resolution)
         max_spm = math.floor(found / resolution) * resolution
         fail_reason = reasons.get(min(reasons, key=lambda k: abs(k - found)), "") if reasons else ""
-        # re-simulate the design at the highest rate with the full loop model (table, load forces)
         error, detail = None, fail_reason
         if found in designs:
-            res = handover_accuracy(problem, designs[found].stroke, found)
-            error = res.handover_error
-            detail = f"at {found:.1f} spm the full simulation gives {error * 1e3:.4f} mm" + (
-                " (torque command beyond the limit)" if res.torque_limited else "") + "; above: " + fail_reason
+            error = designs[found][1].handover_error
+            detail = f"at {found:.1f} spm the full simulation gives {error * 1e3:.4f} mm; above: {fail_reason}"
         points.append(TradeoffPoint(acc, "optimal", max_spm, _binding_of(fail_reason), error, detail))
         lo_known = max_spm
     return points
