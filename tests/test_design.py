@@ -146,7 +146,7 @@ def test_design_json_round_trip(thesis_drive_600, tmp_path):
     paths = design.write(tmp_path)
     data, stroke = read_design(tmp_path / "design.json")
     assert data["spm"] == 600 and data["problem_file"] == str(REFERENCE)
-    assert len(data["cam_table"]["rows"]) == 3600  # 0.1 deg master resolution (digest A.5)
+    assert len(data["cam_table"]["rows"]) == 3600  # 0.1 deg master resolution (sources A.5)
     t = np.linspace(0, stroke.period, 997)
     assert stroke.evaluate(t).s == pytest.approx(design.stroke.evaluate(t).s, abs=1e-12)
     table = np.loadtxt(paths[1], delimiter=",", skiprows=1)

@@ -98,7 +98,7 @@ def test_spring_and_gravity_terms(reference, cat):
     # at rest in the lower dwell (handover, s = 0): gravity and the spring k2 only
     zero = np.zeros(1)
     terms = load_torque(0.0, tr, spec.load, zero, zero, zero)
-    spring = 15.39 + 900 * 9e-3  # digest A.6: preload 900 N/m * 17.1 mm, plus 9 mm past the stop
+    spring = 15.39 + 900 * 9e-3  # sources A.6: preload 900 N/m * 17.1 mm, plus 9 mm past the stop
     assert terms.forces["needle-bar spring k2"] == pytest.approx(-spring * r)
     assert terms.gravity == pytest.approx(0.191 * 9.81 * r)
     assert terms.total == pytest.approx((0.191 * 9.81 - spring) * r)

@@ -38,7 +38,7 @@ def test_jerk_bounded_optimum_beats_modified_sine():
     problem = load_problem(KNOWN / "jerk_bounded_peak_accel.toml")
     design = solve_design(problem)
     law = problem.default_law.characteristics
-    assert law.C_a == pytest.approx(5.373, rel=0.002)  # digest A.3
+    assert law.C_a == pytest.approx(5.373, rel=0.002)  # sources A.3
     assert design.moves[0].C_a < 0.85 * law.C_a
     # the jerk bound holds between the collocation nodes too, and is active
     for move in design.moves:

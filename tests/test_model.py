@@ -1,4 +1,4 @@
-"""The contact model as data: the needle bar of digest A.6 read from the reference problem, and bad input."""
+"""The contact model as data: the needle bar of sources A.6 read from the reference problem, and bad input."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from strokeopt.cli import main
 
 
 def test_needle_bar_bodies_and_masses(reference):
-    # digest A.6 body table (thesis ch. 5)
+    # sources A.6 body table (thesis ch. 5)
     m = reference.model
     masses_g = {name: b.mass * 1e3 for name, b in m.bodies.items()}
     assert masses_g == pytest.approx({"shell": 81.7, "control": 41.9, "cage": 4.3, "roller": 0.6, "needle": 0.2,
@@ -20,7 +20,7 @@ def test_needle_bar_bodies_and_masses(reference):
 
 
 def test_springs_preloads_and_damping(reference):
-    # digest A.6: k2 900 N/m (89 / 71.9 mm), k3 690 (29.2 / 13.4), k4 1680 (11.2 / 9.4), k6 1680 without preload
+    # sources A.6: k2 900 N/m (89 / 71.9 mm), k3 690 (29.2 / 13.4), k4 1680 (11.2 / 9.4), k6 1680 without preload
     s = reference.model.springs
     assert {k: (e.stiffness, e.preload * 1e3) for k, e in s.items()} == {
         "k2": (900.0, pytest.approx(17.1)), "k3": (690.0, pytest.approx(15.8)), "k4": (1680.0, pytest.approx(1.8)),
@@ -31,7 +31,7 @@ def test_springs_preloads_and_damping(reference):
 
 
 def test_contacts_gaps_and_grip(reference):
-    # digest A.6 gaps: H 23, N 7.4 (model file), P 3.6, R 1.1, U 24.3, M 1 mm; contacts 1e9 N/m, grip 1e6 N/m
+    # sources A.6 gaps: H 23, N 7.4 (model file), P 3.6, R 1.1, U 24.3, M 1 mm; contacts 1e9 N/m, grip 1e6 N/m
     c = reference.model.contacts
     gaps = {k: e.gap * 1e3 for k, e in c.items() if e.kind == "contact"}
     assert gaps == pytest.approx({"pad": 23.0, "c21": 0.0, "c32": 7.4, "c13": 3.6, "c31": 0.0, "c14": 1.1,

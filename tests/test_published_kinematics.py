@@ -12,7 +12,7 @@ import pytest
 
 from strokeopt import load_problem, make_law
 
-REL = 0.01  # "reproduce within 1 %" (digest A.3)
+REL = 0.01  # "reproduce within 1 %" (sources A.3)
 
 # thesis Tab. 4.2: 500 spm, published interval times; per move 1/2/3
 TAB_4_2 = {

@@ -33,7 +33,7 @@ def test_only_named_elements_are_built(reference):
 
 
 def test_rest_forces_are_the_preloads(reference):
-    # at t = 0 everything is at x = 0: the springs push with their preload (digest A.6), no contact acts yet
+    # at t = 0 everything is at x = 0: the springs push with their preload (sources A.6), no contact acts yet
     ode = _ode(reference, "release")
     out = ode.outputs(0.0, np.zeros(4), [0, 0.0, 0.01])
     forces = dict(zip(reference.scenes["release"].elements, np.asarray(out[5]).ravel()))

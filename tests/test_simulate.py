@@ -1,7 +1,7 @@
-"""Simulating the needle bar: the published results of thesis ch. 6 (digest A.6), numerical robustness,
+"""Simulating the needle bar: the published results of thesis ch. 6 (sources A.6), numerical robustness,
 and the properties of the integration (convergence, event location, scene agreement).
 
-Model: digest A.6 with the model file's gap N = 7.4 mm; results defined as in digest A.6 (impact = x2
+Model: sources A.6 with the model file's gap N = 7.4 mm; results defined as in sources A.6 (impact = x2
 reaches H; lag = x1 - x2 > 1 um until x2' catches up with x1'; remaining gap N = N - (x3 - x2)).
 Interval times "published" (thesis Tab. 4.1 times) unless stated.
 """
@@ -36,7 +36,7 @@ def release(problem):
     return {spm: simulate_scene(problem, "release", spm) for spm in (500, 600)}
 
 
-# thesis ch. 6 (digest A.6), original k2 = 900 N/m, modified sine chi = 0.095:
+# thesis ch. 6 (sources A.6), original k2 = 900 N/m, modified sine chi = 0.095:
 # impact velocity 2.45 / 2.90 m/s (5 %), lag end 36.9 / 38.6 deg (5 %), impact near 44.5-45 deg (2 deg),
 # smallest remaining gap N 5 / 4 mm (read from a figure, 1 mm; model N = 7.4 mm)
 PUBLISHED = [(500, 2.45, 36.9, 5.0), (600, 2.90, 38.6, 4.0)]
@@ -177,7 +177,7 @@ def test_1200_spm_releases_prematurely(problem):
 
 
 def test_starts_exactly_in_contact(problem, release):
-    # control member and cage start at zero compression of c21 and c31 (digest A.6: all at rest at x = 0);
+    # control member and cage start at zero compression of c21 and c31 (sources A.6: all at rest at x = 0);
     # the transient dies out in the first dwell
     r = release[600]
     t_dwell = problem.stroke(600).pieces[1].t_start
@@ -245,7 +245,7 @@ def test_restarts_at_switches_agree(problem, release):
 
 
 def test_scene_of_the_driven_body_alone(problem):
-    # no state at all: the drive force is the shell's inertia force m a (digest A.6: 81.7 g)
+    # no state at all: the drive force is the shell's inertia force m a (sources A.6: 81.7 g)
     from dataclasses import replace
 
     from strokeopt import make_scene

@@ -9,10 +9,10 @@ from strokeopt import load_problem
 
 
 def test_cycle_time_and_angles(reference):
-    # 500 spm = 250 cam rpm: one cam revolution in 0.24 s (digest A.2 header)
+    # 500 spm = 250 cam rpm: one cam revolution in 0.24 s (sources A.2 header)
     assert reference.timing.period(500) == pytest.approx(0.24)
     sch = reference.timing.schedule(500)
-    # published times put move 1 at 21.0-58.8 deg (digest A.2)
+    # published times put move 1 at 21.0-58.8 deg (sources A.2)
     assert sch.start_angle_deg[1] == pytest.approx(21.0)
     assert sch.end_angle_deg[1] == pytest.approx(58.8)
     assert sch.duration[1] == pytest.approx(0.0252)

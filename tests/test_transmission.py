@@ -71,8 +71,8 @@ def test_motor_kinematics_inverts_the_load_motion(tr):
         assert s == pytest.approx(n, rel=1e-7, abs=1e-6)
 
 
-def test_screw_lever_transfer_function_is_the_digest_product():
-    # digest B: mu24 = cos^2(phi4)/R0 (d phi4/d x2), mu46 = R0P/cos^2(phi4P) (d x6/d phi4P),
+def test_screw_lever_transfer_function_is_the_product_of_the_stages():
+    # sources B: mu24 = cos^2(phi4)/R0 (d phi4/d x2), mu46 = R0P/cos^2(phi4P) (d x6/d phi4P),
     # x2 = s/(2 pi) phi: mu = mu46 * mu24 * s/(2 pi)
     lead, r0, r0p, off = 2e-3, 15e-3, 25e-3, 0.2
     tr = ScrewLever(lead, r0, r0p, off)
@@ -82,7 +82,7 @@ def test_screw_lever_transfer_function_is_the_digest_product():
     mu24 = np.cos(phi4) ** 2 / r0
     mu46 = r0p / np.cos(phi4 + off) ** 2
     assert mu == pytest.approx(mu46 * mu24 * lead / (2 * math.pi), rel=1e-12)
-    # nu24 = -2 cos^3 sin / R0^2 is d mu24 / d x2 (digest B)
+    # nu24 = -2 cos^3 sin / R0^2 is d mu24 / d x2 (sources B)
     h = 1e-7
     num = (np.cos(np.arctan((x2 + h) / r0)) ** 2 - np.cos(np.arctan((x2 - h) / r0)) ** 2) / r0 / (2 * h)
     assert -2 * np.cos(phi4) ** 3 * np.sin(phi4) / r0**2 == pytest.approx(num, rel=1e-5)

@@ -4,7 +4,7 @@ The model is what a mechanism *is*: bodies on one axis, the springs and
 contacts between them, the force laws of the nonlinear elements and the one
 body that is driven by the stroke. Nothing of a particular mechanism is
 written in Python: the six-body needle bar (thesis ch. 5, eqs. 5.30-5.35,
-digest A.6) lives in ``problems/deco2000_needle_bar.toml`` as ``[model]``.
+sources A.6) lives in ``problems/deco2000_needle_bar.toml`` as ``[model]``.
 
 Coordinates are positive in the direction of the handover move (for the needle
 bar: downward, the direction of move 1) and measured from the position every
@@ -106,7 +106,7 @@ class Element:
 
 @dataclass(frozen=True)
 class EventRoles:
-    """Which elements define the needle-handover results (digest A.6 definitions).
+    """Which elements define the needle-handover results (sources A.6 definitions).
 
     * ``impact``: the contact whose first closing is the impact; its first body is the follower
       that hits the stop (the control member);

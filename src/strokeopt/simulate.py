@@ -4,7 +4,7 @@
 body following a :class:`~strokeopt.stroke.StrokeFunction` (a classic law or an
 optimised stroke) over one cycle, from rest at x = 0, and returns a
 :class:`SceneResult`: the trajectory on a fine output grid, the element and
-drive forces, and the needle-handover results of digest A.6:
+drive forces, and the needle-handover results of sources A.6:
 
 * impact: the first time the ``impact`` contact closes (x2 reaches H); impact velocity = x2' then;
 * lag = x_driven - x_follower > 1 um, starting before the impact (after it the stop holds the
@@ -461,7 +461,7 @@ def _event(S, y, dy, refine=None, start: float = -math.inf):
 
 
 def scene_metrics(r: SceneResult, sc, refine=None) -> dict:
-    """The needle-handover results of digest A.6 from a trajectory (None where not defined).
+    """The needle-handover results of sources A.6 from a trajectory (None where not defined).
 
     ``refine(i)``: the trajectory re-integrated finely inside output interval ``i`` (events are
     located there); without it events are interpolated on the output grid.

@@ -139,7 +139,7 @@ class SliderCrank(Transmission):
 
 
 class ScrewLever(Transmission):
-    """Screw and lever of the knitting-machine stitch-cam drive (digest B).
+    """Screw and lever of the knitting-machine stitch-cam drive (sources B).
 
     The motor turns a screw of lead ``s``; the nut moves ``x2 = s/(2 pi) phi``
     and tilts a lever, ``phi4 = atan(x2/R0)``; the lever's other arm, at
