@@ -131,8 +131,6 @@ class DesignSettings:
     check_tolerance: float = 0.005
     refinements: int = 2
     include_pulley_inertia: bool = True
-    belt_tensile_stiffness: float | None = None
-    belt_span: float | None = None
     solver_options: dict = field(default_factory=dict)
 
     @property
@@ -167,12 +165,6 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
     check_tol = f.number("check_tolerance", 0.005, positive=True)
     refinements = f.number("refinements", 2, integer=True, min=0, max=6)
     pulley_inertia = f.boolean("include_pulley_inertia", True)
-    stiffness = f.number("belt_tensile_stiffness_N", None, positive=True)
-    span = f.number("belt_span_mm", None, positive=True)
-    if (stiffness is None) != (span is None):
-        missing = "belt_span_mm" if span is None else "belt_tensile_stiffness_N"
-        raise f.error(missing, "is needed too: the static belt deflection at the handover uses both "
-                               "belt_tensile_stiffness_N and belt_span_mm")
     solver = f.table("solver", required=False)
     options = {}
     if solver is not None:
@@ -184,8 +176,7 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
         solver.finish()
     f.finish()
     return DesignSettings(objective, n, d, rest, jerk, from_law, accuracy, motor_choice, pulley, zmin, zmax,
-                          check_points, check_tol, refinements, pulley_inertia, stiffness,
-                          None if span is None else span * 1e-3, options)
+                          check_points, check_tol, refinements, pulley_inertia, options)
 
 
 # --------------------------------------------------------------------------- the NLP
@@ -689,7 +680,7 @@ def _add_drive(ctx: _Context, radius0: float | None) -> None:
         lim = _Limit("inertia ratio", "load/rotor inertia ratio", drive.limits.max_inertia_ratio, "-",
                      lambda sig, mr=drive.limits.max_inertia_ratio: mr * (1 + sig))
         b.limit(lim, reflected / (rotor * drive.limits.max_inertia_ratio) - 1.0)
-    # handover accuracy: the error terms (static belt deflection; the servo loop adds its own)
+    # handover accuracy: the error terms registered in HANDOVER_ERROR_TERMS (servo.py)
     terms = ([t for t in (term(ctx) for term in HANDOVER_ERROR_TERMS) if t is not None]
              if ctx.extra.get("with_terms", True) else [])
     ctx.extra["handover_terms"] = terms
@@ -771,27 +762,15 @@ def _pin_times(ctx: _Context, sols: list[MoveSolution]) -> dict:
     return out
 
 
-def static_belt_deflection(ctx: _Context):
-    """Handover error term: static stretch of the belt span under the rest force at the handover [m].
-
-    ``F * L / EA`` with ``F`` the effective belt tension at rest at the handover
-    position (gravity and load forces, drive.py), ``L`` the free belt length
-    (``[design] belt_span_mm``) and ``EA`` the belt's tensile stiffness
-    (``[design] belt_tensile_stiffness_N``). None (no term) when either is not given.
-    """
-    s = ctx.settings
-    if ctx.drive is None or s.belt_tensile_stiffness is None or s.belt_span is None:
-        return None
-    return "static belt deflection", ctx.drive.handover_force() * s.belt_span / s.belt_tensile_stiffness
-
-
 #: The terms of the position error at the handover, summed and held within
 #: ``[design] handover_accuracy_mm``. Each is a function of the NLP context
 #: returning ``(name, error in metres)`` (a number, or a CasADi expression of the
 #: design variables, e.g. a servo tracking error that depends on the
 #: acceleration near the handover), or None when it does not apply.
-#: Extension point: the servo issue appends its tracking-error term here.
-HANDOVER_ERROR_TERMS: list = [static_belt_deflection]
+#: servo.py registers its term here (servo tracking, belt stretch under inertia and
+#: load forces with the catalogue's belt stiffness, encoder count): one mechanism,
+#: one set of belt data. Without a term the requirement is reported as not checked.
+HANDOVER_ERROR_TERMS: list = []
 
 
 #: Weight of the jerk-squared regularisation added to epigraph (peak) objectives.
@@ -1415,6 +1394,9 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     if drive is not None:
         # the objective as the fine grid reads it (the NLP saw the nodes)
         design.objective_value = _fine_objective(design, best) if objective in TORQUE_OBJECTIVES else best.value
+    if drive is not None and not best.ctx.extra.get("handover_terms"):
+        design.notes.append(f"handover accuracy {settings.accuracy * 1e3:g} mm NOT checked: the problem has no "
+                            f"[servo] section (servo loop and belt model)")
     if best.fine["worst_relative_violation"] > settings.check_tolerance:
         design.notes.append(f"between collocation nodes a limit is exceeded by "
                             f"{100 * best.fine['worst_relative_violation']:.2f} % (more than check_tolerance "
