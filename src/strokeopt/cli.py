@@ -28,6 +28,20 @@ def _problem_parent() -> argparse.ArgumentParser:
     return p
 
 
+def _stroke_options(p: argparse.ArgumentParser, sweep: bool = False, law: bool = True) -> None:
+    """--spm (and a START:STOP:STEP sweep where the command has one), --law, --chi."""
+    p.add_argument("--spm", help="stitches per minute" + (", or a sweep START:STOP:STEP" if sweep else "")
+                   + " (default: machine.spm of the file)")
+    if law:
+        p.add_argument("--law", help="use this motion law for every move (see 'strokeopt laws')")
+        p.add_argument("--chi", type=float, help="shape parameter chi of the modified sine law (0 < chi <= 0.25)")
+
+
+def _plot_option(p: argparse.ArgumentParser, name: str | None) -> None:
+    where = f"default {DEFAULT_OUT}/<problem>_{name}.png; " if name else ""
+    p.add_argument("--plot", metavar="FILE", help=f"figure file ({where}'none' for no figure)")
+
+
 def _spm_value(text: str) -> float:
     try:
         value = float(text)
@@ -470,10 +484,8 @@ def build_parser() -> argparse.ArgumentParser:
                                    "bar speed, acceleration and jerk, and peak pulley speed and acceleration; "
                                    "a figure of position, velocity, acceleration and jerk over the cam angle.",
                        epilog="Example: strokeopt kinematics problems/deco2000_needle_bar.toml --spm 600 --law poly5")
-    p.add_argument("--spm", help="stitches per minute (default: machine.spm of the file)")
-    p.add_argument("--law", help="use this motion law for every move (see 'strokeopt laws')")
-    p.add_argument("--chi", type=float, help="shape parameter chi of the modified sine law (0 < chi <= 0.25)")
-    p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_kinematics.png; 'none' for no figure)")
+    _stroke_options(p)
+    _plot_option(p, "kinematics")
     p.set_defaults(run=cmd_kinematics)
 
     p = sub.add_parser("size", parents=[problem], help="rank motors and pulleys: torque, RMS, speed, inertia, belt checks",
@@ -485,9 +497,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "problem: moving mass, gravity, load forces.",
                        epilog="Example: strokeopt size problems/deco2000_needle_bar.toml --spm 600 --max-spm "
                               "--motor 055U2B30 --explain")
-    p.add_argument("--spm", help="stitches per minute (default: machine.spm of the file)")
-    p.add_argument("--law", help="use this motion law for every move (see 'strokeopt laws')")
-    p.add_argument("--chi", type=float, help="shape parameter chi of the modified sine law")
+    _stroke_options(p)
     p.add_argument("--motor", action="append", metavar="NAME", help="only this catalogue motor (repeatable)")
     p.add_argument("--pulley-teeth", type=int, action="append", metavar="Z", help="only this pulley (repeatable)")
     p.add_argument("--catalogue", action="append", default=[], metavar="FILE",
@@ -497,7 +507,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--continuous-radius", action="store_true",
                    help="also the pulley radius minimising each motor's peak torque (not rounded to teeth)")
     p.add_argument("--explain", action="store_true", help="torque breakdown at the peak and every check's margin")
-    p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_sizing.png; 'none' for no figure)")
+    _plot_option(p, "sizing")
     p.set_defaults(run=cmd_size)
 
     p = sub.add_parser("solve", parents=[problem], help="optimal stroke, pulley and motor by direct collocation",
@@ -515,7 +525,7 @@ def build_parser() -> argparse.ArgumentParser:
                               "strokeopt solve problems/deco2000_needle_bar.toml --spm 400:900:50; "
                               "strokeopt solve problems/known_optima/min_jerk.toml")
     p.add_argument("--objective", help="objective (overrides design.objective of the file)")
-    p.add_argument("--spm", help="stitches per minute, or a sweep START:STOP:STEP (default: machine.spm of the file)")
+    _stroke_options(p, sweep=True, law=False)
     p.add_argument("--out", metavar="DIR", help="write design.json, cam_table.csv (0.1 deg) and stroke.png into DIR")
     p.add_argument("--study", choices=("mesh",), help="'mesh': objective error, violation between nodes and time "
                                                       "over mesh sizes and collocation degrees")
@@ -544,9 +554,7 @@ def build_parser() -> argparse.ArgumentParser:
                               "strokeopt simulate problems/deco2000_needle_bar.toml --spm 300:1200:20 --plot sweep.png; "
                               "strokeopt simulate problems/deco2000_needle_bar.toml --set "
                               "model.springs.k2.stiffness_N_m=1240 --set model.contacts.c32.gap_mm=6.5")
-    p.add_argument("--spm", help="stitches per minute, or a sweep START:STOP:STEP (default: machine.spm of the file)")
-    p.add_argument("--law", help="use this motion law for every move (see 'strokeopt laws')")
-    p.add_argument("--chi", type=float, help="shape parameter chi of the modified sine law")
+    _stroke_options(p, sweep=True)
     _simulation_arguments(p)
     p.add_argument("--study", choices=("tolerance",),
                    help="'tolerance': error of impact velocity and release angle against a tight reference vs CPU "
@@ -579,15 +587,13 @@ def build_parser() -> argparse.ArgumentParser:
                                    "--compare-laws adds the handover error and the residual vibration of every "
                                    "classic law on the same drive.",
                        epilog="Example: strokeopt accuracy problems/deco2000_needle_bar.toml --spm 600 --compare-laws")
-    p.add_argument("--spm", help="stitches per minute (default: machine.spm of the file)")
-    p.add_argument("--law", help="use this motion law for every move (see 'strokeopt laws')")
-    p.add_argument("--chi", type=float, help="shape parameter chi of the modified sine law (0 < chi <= 0.25)")
+    _stroke_options(p)
     p.add_argument("--compare-laws", action="store_true",
                    help="also report handover error and residual vibration of every classic law")
     p.add_argument("--design", metavar="DESIGN_JSON",
                    help="add the optimal stroke of a design.json (strokeopt solve --out) to the law comparison, "
                         "at the rate it was solved for")
-    p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_accuracy.png; 'none' for no figure)")
+    _plot_option(p, "accuracy")
     p.set_defaults(run=cmd_accuracy)
 
     p = sub.add_parser("tradeoff", parents=[problem], help="what accuracy costs: highest stitch rate per handover accuracy",
@@ -603,7 +609,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--strokes", choices=("both", "classic", "optimal"), default="both",
                    help="which strokes to compare (default both)")
     p.add_argument("--resolution", type=float, default=10.0, help="stitch-rate resolution of the search [spm] (default 10)")
-    p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_tradeoff.png; 'none' for no figure)")
+    _plot_option(p, "tradeoff")
     p.set_defaults(run=cmd_tradeoff)
     return parser
 

@@ -513,6 +513,19 @@ def rank(candidates: list[Candidate]) -> list[Candidate]:
     return sorted(candidates, key=lambda c: (not c.feasible, c.check("overload").value, c.check("inertia_ratio").value))
 
 
+def bisect_highest(ok, lo: float, hi: float, resolution: float) -> tuple[float, float]:
+    """Bracket ``(lo, hi)``, ``hi - lo <= resolution``, of the threshold where ``ok`` turns false,
+    given ``ok(lo)`` and not ``ok(hi)`` (``ok`` true below the threshold): the highest feasible
+    stitch rate is ``lo``, the first failing one ``hi``."""
+    while hi - lo > resolution:
+        mid = 0.5 * (lo + hi)
+        if ok(mid):
+            lo = mid
+        else:
+            hi = mid
+    return lo, hi
+
+
 def max_spm(kin, spm: float, motor, pulley, load: Load, limits: DriveLimits, belt: BeltSpec | None = None,
             resolution: float = 1.0, highest: float = 20_000.0) -> tuple[float | None, str]:
     """Highest stitch rate [spm] at which every check of ``motor`` with ``pulley`` passes.
@@ -539,12 +552,7 @@ def max_spm(kin, spm: float, motor, pulley, load: Load, limits: DriveLimits, bel
             lo = hi
             if hi >= highest:
                 return highest, binding_check(checks_at(highest)).name
-    while hi - lo > resolution:
-        mid = 0.5 * (lo + hi)
-        if ok(mid):
-            lo = mid
-        else:
-            hi = mid
+    lo, hi = bisect_highest(ok, lo, hi, resolution)
     if lo < resolution:
         return None, binding_check(checks_at(resolution)).name
     failing = [c for c in checks_at(hi) if not c.ok]

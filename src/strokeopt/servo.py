@@ -82,6 +82,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .drive import bisect_highest
 from .errors import ProblemError, SolverError
 
 #: Keys of ``contributions_mm`` in an accuracy report.
@@ -1093,17 +1094,6 @@ class TradeoffPoint:
                 "detail": self.detail}
 
 
-def _bisect(ok, lo: float, hi: float, resolution: float) -> float:
-    """Largest x in [lo, hi) with ok(x), given ok(lo) and not ok(hi)."""
-    while hi - lo > resolution:
-        mid = 0.5 * (lo + hi)
-        if ok(mid):
-            lo = mid
-        else:
-            hi = mid
-    return lo
-
-
 def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step: float = 50.0,
                      lowest: float = 100.0, progress=None) -> list[TradeoffPoint]:
     """Highest stitch rate with the problem's classic law for each required handover accuracy [m].
@@ -1169,7 +1159,7 @@ def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step
         elif prev is None:
             max_spm, binding = None, fail[1]
         else:
-            max_spm = _bisect(ok, prev, fail[0], resolution)
+            max_spm = bisect_highest(ok, prev, fail[0], resolution)[0]
             e_hi, sat_hi = evaluate(min(max_spm + resolution, fail[0]))
             binding = "torque_limit" if sat_hi else "handover_accuracy"
         if best is not None and (max_spm is None or max_spm < best):
@@ -1257,7 +1247,7 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
         hi = lo * 1.25
         while ok(hi):
             lo, hi = hi, hi * 1.25
-        found = _bisect(ok, lo, hi, resolution)
+        found = bisect_highest(ok, lo, hi, resolution)[0]
         max_spm = math.floor(found / resolution) * resolution
         fail_reason = reasons.get(min(reasons, key=lambda k: abs(k - found)), "") if reasons else ""
         error, detail = None, fail_reason
