@@ -47,3 +47,22 @@ def test_help_teaches(capsys):
     assert exc.value.code == 0
     out = capsys.readouterr().out
     assert "--set" in out and "Example" in out
+
+
+def test_unwritable_figure_format_is_bad_input(capsys, reference_path, tmp_path):
+    assert main(["kinematics", str(reference_path), "--plot", str(tmp_path / "k.txt")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--plot" in err and "'txt'" in err and ".png" in err
+
+
+def test_json_stays_json_with_verbose_solver_logs(tmp_path):
+    import subprocess
+    import sys
+
+    from conftest import ROOT
+
+    run = subprocess.run([sys.executable, "-m", "strokeopt.cli", "solve", str(ROOT / "problems/known_optima/min_jerk.toml"),
+                          "--json", "--verbose", "--plot", "none"], capture_output=True, text=True, cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert json.loads(run.stdout)["status"] == "optimal"  # only JSON on stdout
+    assert "Ipopt" in run.stderr  # the solver log went to stderr

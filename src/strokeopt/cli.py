@@ -99,7 +99,7 @@ def cmd_laws(args) -> int:
 
     rows = law_table()
     if args.json:
-        print(to_json({"laws": rows}))
+        _emit(to_json({"laws": rows}))
         return 0
     for r in rows:
         r["params"] = ", ".join(f"{k} = {v:g}" for k, v in r["params"].items()) or None
@@ -118,7 +118,7 @@ def cmd_kinematics(args) -> int:
     stroke = problem.stroke()
     summary = kinematics_summary(problem, stroke, problem.spm)
     if args.json:
-        print(to_json(summary))
+        _emit(to_json(summary))
     else:
         print(kinematics_text(summary))
     _write_figure(lambda p: plot_kinematics(problem, stroke, problem.spm, p), _plot_path(args, "kinematics"), args)
@@ -153,7 +153,7 @@ def cmd_size(args) -> int:
                 "teeth_equivalent": opt.teeth_equivalent, "peak_torque_N_m": opt.peak_torque,
                 "pulley_inertia_kg_cm2": opt.pulley_inertia * 1e4})
     if args.json:
-        print(to_json(report))
+        _emit(to_json(report))
     else:
         inp = report["inputs"]
         forces = "; ".join(f"{f['name']} ({f['kind']}, {f['force_N']:g} N + {f['stiffness_N_m']:g} N/m "
@@ -205,7 +205,7 @@ def cmd_bench(args) -> int:
 
     results = run_benchmarks(args.only)
     if args.json:
-        print(to_json({"benchmarks": [r.as_dict() for r in results]}))
+        _emit(to_json({"benchmarks": [r.as_dict() for r in results]}))
     else:
         print(format_results(results))
     return 0
@@ -225,6 +225,7 @@ def cmd_accuracy(args) -> int:
                                                    "spm: omit --spm or solve the design at that rate")
         args.spm = str(data["spm"])
         extra = [(f"optimal ({data.get('objective', 'design')})", optimal)]
+        drive_used = _design_drive(args, data)
     problem = _load(args)
     progress = None
     if (args.compare_laws or extra) and not args.json:
@@ -234,12 +235,37 @@ def cmd_accuracy(args) -> int:
             return tqdm(items, desc="laws", unit="law", file=sys.stderr, leave=False)
     report, result = accuracy_report(problem, problem.spm, compare_laws=args.compare_laws or bool(extra),
                                      extra_strokes=extra, progress=progress)
+    if args.design:
+        report["drive_from_design"] = {"design": str(args.design), **drive_used}
     if args.json:
-        print(to_json(report))
+        _emit(to_json(report))
     else:
         print(accuracy_text(report))
     _write_figure(lambda p: result.plot(p), _plot_path(args, "accuracy"), args)
     return 0
+
+
+def _design_drive(args, data: dict) -> dict:
+    """Make ``args.overrides`` use the motor and pulley a design.json was solved with (the design's
+    stroke is only right on its own drive); a --set forcing another motor or pulley is an error."""
+    from .problem import parse_override
+
+    design = {"motor": data.get("motor"), "pulley_teeth": data.get("pulley_teeth")}
+    keys = {"motor": ("drive", "motor"), "pulley_teeth": ("transmission", "pulley_teeth")}
+    used = {}
+    for name, path in keys.items():
+        value = design[name]
+        if value is None:
+            continue
+        for text in args.overrides:
+            key, forced = parse_override(text)
+            if tuple(key) == path and forced != value:
+                raise ProblemError(args.design, name, f"the design was solved with {name} {value}, but --set {text} "
+                                                      "forces another: omit the --set or solve the design for it")
+        args.overrides.append(f"{'.'.join(path)}={value!r}" if name == "pulley_teeth"
+                              else f'{".".join(path)}="{value}"')
+        used[name] = value
+    return used
 
 
 def cmd_tradeoff(args) -> int:
@@ -265,7 +291,7 @@ def cmd_tradeoff(args) -> int:
             return tqdm(items, desc="tradeoff", file=sys.stderr, leave=False)
     report = tradeoff(problem, accuracies, strokes=args.strokes, resolution=args.resolution, progress=progress)
     if args.json:
-        print(to_json(report))
+        _emit(to_json(report))
     else:
         print(tradeoff_text(report))
     _write_figure(lambda p: plot_tradeoff(report, p), _plot_path(args, "tradeoff"), args)
@@ -298,7 +324,7 @@ def _report_scene(args, problem, scene, result, extra=None) -> None:
         print(f"integrator: {result.options.method}, {result.stats['nsteps']} steps, "
               f"{result.stats['n_output']} output points", file=sys.stderr)
     if args.json:
-        print(to_json(summary))
+        _emit(to_json(summary))
     else:
         print(scene_text(problem, scene, summary))
     _write_figure(lambda p: result.plot(p), _plot_path(args, f"simulate_{scene}"), args)
@@ -323,7 +349,7 @@ def cmd_simulate(args) -> int:
             raise ProblemError("--spm", "", "the tolerance study runs at one speed, not a range")
         study = tolerance_study(problem, scene, problem.spm, progress=not args.json)
         if args.json:
-            print(to_json(study))
+            _emit(to_json(study))
         else:
             ref = study["reference"]
             print(f"work-precision of scene {scene!r} at {study['spm']:g} spm against a reference at rtol "
@@ -339,7 +365,7 @@ def cmd_simulate(args) -> int:
         rows = sweep_spm(problem, scene, args.spm, options, progress=not args.json)
         onset = lag_onset_spm(rows)
         if args.json:
-            print(to_json({"scene": scene, "lag_onset_spm": onset, "rows": rows}))
+            _emit(to_json({"scene": scene, "lag_onset_spm": onset, "rows": rows}))
         else:
             print(format_table(rows, SWEEP_COLUMNS, title=f"{problem.name}: scene {scene!r}, speed sweep "
                                                           f"(interval times {problem.timing.interval_times})"))
@@ -403,7 +429,7 @@ def cmd_solve(args) -> int:
     if args.study == "mesh":
         rows = mesh_study(problem, objective=args.objective, progress=progress and (lambda it: progress(it, "mesh")))
         if args.json:
-            print(to_json({"problem": problem.name, "spm": problem.spm, "study": "mesh", "rows": rows}))
+            _emit(to_json({"problem": problem.name, "spm": problem.spm, "study": "mesh", "rows": rows}))
         else:
             print(f"{problem.name} at {problem.spm:g} spm: the same design on each mesh (file's motor and pulley); "
                   f"error against the last (finest) mesh")
@@ -418,7 +444,7 @@ def cmd_solve(args) -> int:
                          progress=progress and (lambda it: progress(it, "spm")))
         best = fastest_feasible(rows)
         if args.json:
-            print(to_json({"problem": problem.name, "objective": args.objective or
+            _emit(to_json({"problem": problem.name, "objective": args.objective or
                            (problem.design.objective if problem.design else None), "rows": rows,
                            "fastest_feasible_spm": best}))
         else:
@@ -434,7 +460,7 @@ def cmd_solve(args) -> int:
     design = solve_design(problem, objective=args.objective, verbose=args.verbose)
     comparison = compare_with_laws(design)
     if args.json:
-        print(to_json({**design_summary(design), "comparison": comparison}))
+        _emit(to_json({**design_summary(design), "comparison": comparison}))
     else:
         print(design_text(design, comparison))
     if args.out is not None:
@@ -614,10 +640,65 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _check_plot_format(args) -> None:
+    """A --plot file name matplotlib cannot write is bad input: say so before any work is done."""
+    plot = getattr(args, "plot", None)
+    if plot is None or plot.lower() == "none":
+        return
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    formats = FigureCanvasBase.get_supported_filetypes()
+    suffix = Path(plot).suffix.lower().lstrip(".")
+    if suffix not in formats:
+        raise ProblemError("--plot", plot, f"cannot write a figure as {suffix or 'a file without extension'!r}; "
+                                           f"use one of .{', .'.join(sorted(formats))}")
+
+
+_JSON_OUT = None  # where --json output goes while solver logs are sent to stderr
+
+
+def _emit(text: str) -> None:
+    """Print the command's JSON (stdout, also when --verbose sends every log to stderr)."""
+    print(text, file=_JSON_OUT or sys.stdout)
+
+
+class _LogsToStderr:
+    """With --json --verbose: every log (IPOPT and SUNDIALS through CasADi, which print via
+    Python's sys.stdout or the C stdout) goes to stderr, so stdout carries only the JSON."""
+
+    def __enter__(self):
+        import os
+
+        global _JSON_OUT
+        sys.stdout.flush()
+        self._saved_fd = os.dup(1)
+        _JSON_OUT = os.fdopen(os.dup(self._saved_fd), "w")
+        os.dup2(2, 1)
+        self._saved_stdout = sys.stdout
+        sys.stdout = sys.stderr
+        return self
+
+    def __exit__(self, *exc):
+        import os
+
+        global _JSON_OUT
+        _JSON_OUT.flush()
+        _JSON_OUT.close()
+        _JSON_OUT = None
+        sys.stdout = self._saved_stdout
+        os.dup2(self._saved_fd, 1)
+        os.close(self._saved_fd)
+        return False
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
+        _check_plot_format(args)
+        if getattr(args, "json", False) and getattr(args, "verbose", False):
+            with _LogsToStderr():
+                return args.run(args)
         return args.run(args)
     except ProblemError as exc:
         print(f"strokeopt: error: {exc}", file=sys.stderr)
