@@ -104,3 +104,10 @@ def test_law_on_a_dwell_is_an_error(write_problem):
     path = write_problem(lambda t: t.replace("span_deg = 169.6", 'span_deg = 169.6\nlaw = "poly5"'))
     with pytest.raises(ProblemError, match=r"timing.intervals\[3\].law: a dwell"):
         load_problem(path)
+
+
+def test_misspelt_required_key_is_named(write_problem):
+    path = write_problem(lambda t: t.replace("start_position_mm = 32.0", "start_positon_mm = 32.0"))
+    with pytest.raises(ProblemError, match=r"timing.start_position_mm: is required but missing "
+                                           r"\(is 'start_positon_mm' a misspelling of it\?\)"):
+        load_problem(path)

@@ -72,3 +72,12 @@ def test_jerk_unbounded_for_laws_with_acceleration_jumps(reference):
         peaks = reference.with_law(make_law(name)).stroke().piece_peaks()
         assert np.isinf(peaks[1].j_max) == unbounded, name
         assert peaks[0].j_max == 0  # a dwell has no jerk
+
+
+def test_reported_span_is_the_angle_the_times_give(reference):
+    from strokeopt.report import kinematics_summary
+
+    # published times put move 1 at 21.0-58.8 deg: 37.8 deg, against the nominal 37.4 (thesis Tab. 4.1)
+    move1 = kinematics_summary(reference, reference.stroke(), 500)["moves"][0]
+    assert move1["span_deg"] == pytest.approx(37.8)
+    assert move1["span_nominal_deg"] == pytest.approx(37.4)

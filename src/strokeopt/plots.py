@@ -26,8 +26,10 @@ def plot_kinematics(problem, strokes, spm: float, path: str | Path | None = None
     if not isinstance(strokes, (list, tuple)):
         strokes = [strokes]
     fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 9), constrained_layout=True)
+    j_peak = max(float(np.max(np.abs(s.sample(n).j))) for s in strokes)
+    jerk_unit = ("km/s$^3$", 1e-3) if j_peak >= 1e4 else ("m/s$^3$", 1.0)
     units = [("position", "mm", 1e3), ("velocity", "m/s", 1.0), ("acceleration", "m/s$^2$", 1.0),
-             ("jerk", "km/s$^3$", 1e-3)]
+             ("jerk", *jerk_unit)]
     for stroke in strokes:
         k = stroke.sample(n)
         angle = 360.0 * k.t / stroke.period
@@ -49,7 +51,8 @@ def plot_kinematics(problem, strokes, spm: float, path: str | Path | None = None
     axes[-1].set_xlabel("cam angle [deg]")
     axes[-1].set_xlim(0, 360)
     axes[-1].set_xticks(np.arange(0, 361, 30))
-    axes[0].set_title(f"{problem.name}: stroke at {spm:g} spm (dwells shaded)")
+    has_dwell = any(not i.is_move for i in problem.timing.intervals)
+    axes[0].set_title(f"{problem.name}: stroke at {spm:g} spm" + (" (dwells shaded)" if has_dwell else ""))
     if len(strokes) > 1:
         axes[0].legend(loc="best", fontsize=8)
     if path is not None:

@@ -61,7 +61,9 @@ class Fields:
         self._read.add(key)
         if key not in self.data:
             if default is _REQUIRED:
-                raise self.error(key, "is required but missing")
+                typo = difflib.get_close_matches(key, [k for k in self.data if isinstance(k, str)], n=1, cutoff=0.75)
+                hint = f" (is {typo[0]!r} a misspelling of it?)" if typo else ""
+                raise self.error(key, "is required but missing" + hint)
             return default
         return self.data[key]
 

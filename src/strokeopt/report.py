@@ -83,7 +83,8 @@ def kinematics_summary(problem, stroke: StrokeFunction, spm: float) -> dict:
             "law": itv.law.label if itv.is_move else None,
             "stroke_mm": abs(itv.stroke) * 1e3,
             "direction": ("up" if itv.stroke > 0 else "down") if itv.is_move else None,
-            "span_deg": itv.span_deg,
+            "span_deg": 360.0 * dur / sch.period,  # the cam angle the interval takes at these times
+            "span_nominal_deg": itv.span_deg,  # as the timing diagram states it
             "start_angle_deg": 360.0 * t0 / sch.period,
             "end_angle_deg": 360.0 * (t0 + dur) / sch.period,
             "time_s": dur,
