@@ -132,3 +132,36 @@ def test_accuracy_with_an_optimal_design(capsys, reference, reference_path, tmp_
     # a design solved at another rate is refused, naming the file
     assert main(["accuracy", str(reference_path), "--design", str(path), "--spm", "500", "--plot", "none"]) == 2
     assert str(path) in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_accuracy_uses_the_drive_of_the_design(capsys, reference_path, tmp_path):
+    # a design solved on a 22-tooth pulley is checked on that pulley and its motor, not the file's 28 teeth
+    from dataclasses import replace
+
+    from strokeopt.design import DesignSettings, read_design, solve_design
+    from strokeopt.problem import load_problem
+    from strokeopt.servo import handover_accuracy
+
+    z22 = load_problem(reference_path, ["transmission.pulley_teeth=22"])
+    settings = replace(z22.design or DesignSettings(), motor_choice="fixed", pulley="fixed", mesh_intervals=20)
+    solve_design(z22, spm=600, settings=settings).write(tmp_path)
+    path = tmp_path / "design.json"
+    assert main(["accuracy", str(reference_path), "--design", str(path), "--json", "--plot", "none"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["drive_from_design"]["pulley_teeth"] == 22
+    assert data["drive_from_design"]["motor"] == data["motor"] == z22.drive.motor
+    assert data["pulley_pitch_diameter_mm"] == pytest.approx(22 * 3 / 3.141592653589793, rel=1e-3)  # GT3: 3 mm pitch
+    # the optimal row is the design's stroke on the design's drive
+    _, stroke = read_design(path)
+    direct = handover_accuracy(z22, stroke, 600)
+    assert data["laws"][-1]["handover_error_mm"] == pytest.approx(direct.handover_error * 1e3, rel=1e-6)
+    # the text says which drive it used and why solve's own check can be smaller
+    assert main(["accuracy", str(reference_path), "--design", str(path), "--plot", "none"]) == 0
+    out = capsys.readouterr().out
+    assert "pulley 22 teeth (from the design file" in out and "end of the handover move" in out
+    # forcing another pulley or motor than the design's is refused, not mixed
+    for forced in ("transmission.pulley_teeth=28", "drive.motor=055U2C30"):
+        assert main(["accuracy", str(reference_path), "--design", str(path), "--set", forced, "--plot", "none"]) == 2
+        err = capsys.readouterr().err
+        assert str(path) in err and forced in err and "Traceback" not in err

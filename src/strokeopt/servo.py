@@ -858,7 +858,22 @@ def accuracy_text(report: dict) -> str:
     g = report["gains"]
     c = report["contributions_mm"]
     sc = report["signed_contributions_mm"]
-    lines = [
+    lines = []
+    used = report.get("drive_from_design")
+    if used:
+        lines += [
+            f"drive of the design {used['design']}: motor {used.get('motor', report['motor'])}, pulley "
+            f"{used.get('pulley_teeth', '-')} teeth (from the design file, not the problem file)",
+            # The design solve checks the bar error at the end of the handover move only, for a continuous
+            # reference (the error as a linear functional of the stroke's acceleration). This report simulates
+            # the full loop: the position table sampled (worst of several table phases), the largest error
+            # over the whole handover window after the move, plus one encoder count. It is therefore the
+            # larger of the two, by the window's belt ringing and the sampling.
+            "  note: the design solve checks the error at the end of the handover move with a continuous "
+            "reference; below is the full loop (sampled table, largest error over the handover window, plus one "
+            "encoder count), so it can be larger",
+        ]
+    lines += [
         f"{report['problem']} at {report['spm']:g} spm, {report['label']}: motor {report['motor']}, "
         f"pulley PD {report['pulley_pitch_diameter_mm']:.2f} mm, moving mass {report['moving_mass_kg']:g} kg",
         f"belt {report['belt_stiffness_N_per_mm']:.0f} N/mm at the carrier ({report['belt_stiffness_source']}), "
