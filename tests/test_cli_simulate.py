@@ -95,7 +95,7 @@ def test_bad_problem_file_exit_2(capsys, write_problem, edit, words):
 
 
 @pytest.mark.slow  # solves a design first (collocation, seconds to tens of seconds)
-def test_verify_design(capsys, reference_path, tmp_path):
+def test_verify_design(capsys, reference_path, tmp_path, monkeypatch):
     from strokeopt import load_problem
     from strokeopt.design import solve_design
 
@@ -105,6 +105,11 @@ def test_verify_design(capsys, reference_path, tmp_path):
     data = json.loads(capsys.readouterr().out)
     assert data["design"] == str(path) and data["spm"] == 600 and data["stroke"] == "optimal"
     assert data["impact_velocity_m_s"] > 0 and data["release_angle_deg"] > data["impact_angle_deg"]
+    # the default figure is verify's own, next to (not over) simulate's
+    monkeypatch.chdir(tmp_path)
+    assert main(["verify", str(path), "--scene", "release", "--json"]) == 0
+    capsys.readouterr()
+    assert [f.name for f in (tmp_path / "strokeopt-out").iterdir()] == [f"{reference_path.stem}_verify_release.png"]
 
 
 def test_verify_bad_file(capsys, tmp_path):
@@ -119,3 +124,31 @@ def test_help_teaches(capsys):
         main(["simulate", "--help"])
     out = capsys.readouterr().out
     assert "Example" in out and "--spm" in out and "gap N" in out
+
+
+def test_verify_help_example_writes_what_it_reads(capsys):
+    with pytest.raises(SystemExit):
+        main(["verify", "--help"])
+    out = " ".join(capsys.readouterr().out.split())
+    assert "strokeopt solve problems/deco2000_needle_bar.toml --out out && strokeopt verify out/design.json" in out
+    assert "_verify_<scene>.png" in out
+
+
+@pytest.mark.parametrize("command", ["simulate", "verify"])
+def test_smoothing_is_not_a_command_line_option(capsys, reference_path, command):
+    # smoothing the contact switches is a study device (--study tolerance), not a model option
+    with pytest.raises(SystemExit) as exc:
+        main([command, str(reference_path), "--smoothing-mm", "1", "--plot", "none"])
+    assert exc.value.code == 2
+    assert "--smoothing-mm" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    assert "--smoothing-mm" not in capsys.readouterr().out
+
+
+def test_integrator_failure_is_one_line_of_strokeopt(capfd, reference_path):
+    # a near-massless body makes CVODES fail; SUNDIALS' own "At t = ..." must not reach the user
+    assert main(["simulate", str(reference_path), "--set", "model.bodies.control.mass_g=1e-9", "--plot", "none"]) == 1
+    out, err = capfd.readouterr()
+    assert out == "" and "At t =" not in err
+    assert err.count("\n") == 1 and err.startswith("strokeopt: failed: cvodes failed") and "error test" in err

@@ -301,7 +301,9 @@ def cmd_tradeoff(args) -> int:
 def _sim_options(args):
     from .simulate import SimulationOptions
 
-    return SimulationOptions(method=args.method, rtol=args.rtol, atol=args.atol, smoothing=args.smoothing_mm * 1e-3)
+    # hard contact switches only: smoothing them is a numerical study device (SimulationOptions.smoothing,
+    # --study tolerance shows its bias), not a model option; at ordinary widths it changes the answer
+    return SimulationOptions(method=args.method, rtol=args.rtol, atol=args.atol, verbose=args.verbose)
 
 
 def _scene_name(args, problem) -> str:
@@ -315,7 +317,7 @@ def _scene_name(args, problem) -> str:
     return name
 
 
-def _report_scene(args, problem, scene, result, extra=None) -> None:
+def _report_scene(args, problem, scene, result, extra=None, kind: str = "simulate") -> None:
     from .report import to_json
     from .simulate import scene_text
 
@@ -327,7 +329,7 @@ def _report_scene(args, problem, scene, result, extra=None) -> None:
         _emit(to_json(summary))
     else:
         print(scene_text(problem, scene, summary))
-    _write_figure(lambda p: result.plot(p), _plot_path(args, f"simulate_{scene}"), args)
+    _write_figure(lambda p: result.plot(p), _plot_path(args, f"{kind}_{scene}"), args)
 
 
 def cmd_simulate(args) -> int:
@@ -398,7 +400,8 @@ def cmd_verify(args) -> int:
     args.problem = str(path)
     scene = _scene_name(args, problem)
     result = simulate_scene(problem, scene, problem.spm, stroke=stroke, options=_sim_options(args))
-    _report_scene(args, problem, scene, result, {"design": str(args.design), "objective": data.get("objective")})
+    _report_scene(args, problem, scene, result, {"design": str(args.design), "objective": data.get("objective")},
+                  kind="verify")
     return 0
 
 
@@ -481,8 +484,6 @@ def _simulation_arguments(p) -> None:
     p.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance (default 1e-5: impact velocity to ~1e-4 m/s)")
     p.add_argument("--atol", type=float, default=1e-6,
                    help="absolute tolerance in scaled states: positions in mm, velocities in m/s (default 1e-6)")
-    p.add_argument("--smoothing-mm", type=float, default=0.0,
-                   help="smooth the contact switches over this width (mm; default 0 = hard switches)")
 
 
 # --------------------------------------------------------------------------- parser
@@ -593,7 +594,8 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Re-simulate an optimised stroke: read DESIGN.json (its exact stroke, speed and "
                                    "problem file) and integrate a scene of the problem's contact model with it, "
                                    "reporting the same results as 'simulate'.",
-                       epilog="Example: strokeopt verify strokeopt-out/design.json --scene release --plot verify.png")
+                       epilog="Example: strokeopt solve problems/deco2000_needle_bar.toml --out out && "
+                              "strokeopt verify out/design.json --scene release")
     p.add_argument("design", metavar="DESIGN.json", help="design file written by the design solve")
     p.add_argument("--problem", help="problem file (default: the problem_file recorded in DESIGN.json)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY.PATH=VALUE",
@@ -601,7 +603,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print only JSON on stdout (for scripts)")
     p.add_argument("--verbose", action="store_true", help="print integrator output")
     _simulation_arguments(p)
-    p.add_argument("--plot", metavar="FILE", help="figure file ('none' for no figure)")
+    p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_verify_<scene>.png; "
+                                                  "'none' for no figure)")
     p.set_defaults(run=cmd_verify)
 
     p = sub.add_parser("accuracy", parents=[problem], help="handover accuracy: servo loop, belt stretch, encoder",

@@ -99,6 +99,7 @@ class SimulationOptions:
     spacing). ``restart_at_switches``: integrate piecewise between detected contact switches
     (restarting the integrator at each) instead of across them; slower, kept for the
     comparison of the tolerance study. ``integrator_options`` pass straight to ``casadi.integrator``.
+    ``verbose``: let SUNDIALS print its own messages (otherwise only the SolverError says why).
     """
 
     method: str = "cvodes"
@@ -109,6 +110,7 @@ class SimulationOptions:
     max_num_steps: int = 200_000
     restart_at_switches: bool = False
     integrator_options: dict | None = None
+    verbose: bool = False
 
     def check(self) -> None:
         if self.method not in METHODS:
@@ -187,9 +189,29 @@ def _integrator(ode, opts: SimulationOptions, n_out: int, refine: bool = False):
     dae = ode.refine_dae if refine else ode.dae
     # BDF order <= 2: the orders 3-5 are not A-stable, and the lightly damped contact modes
     # (1e5-1e6 rad/s, damping ratio ~0.01) made CVODES fail its error test over and over (4-10x more steps)
-    iopts = {"abstol": opts.atol, "reltol": opts.rtol, "max_num_steps": opts.max_num_steps, "max_order": 2}
+    iopts = {"abstol": opts.atol, "reltol": opts.rtol, "max_num_steps": opts.max_num_steps, "max_order": 2,
+             "disable_internal_warnings": not opts.verbose}  # SUNDIALS prints "At t = ..." to stdout otherwise
     iopts.update(opts.integrator_options or {})
     return ca.integrator("scene_refine" if refine else "scene", opts.method, dae, 0.0, grid[1:], iopts), grid
+
+
+#: SUNDIALS return flags in words (the SolverError says why instead of the raw flag).
+_FLAG_WORDS = {
+    "ERR_FAILURE": "the error test failed repeatedly (the step shrank to its minimum: the model is too stiff or "
+                   "near-singular, e.g. a body of almost no mass)",
+    "CONV_FAILURE": "the corrector did not converge (the step shrank to its minimum: the model is too stiff or "
+                    "near-singular)",
+    "TOO_MUCH_WORK": "max_num_steps reached",
+    "TOO_MUCH_ACC": "the tolerances are tighter than the arithmetic allows",
+}
+
+
+def _why(exc: RuntimeError) -> str:
+    text = str(exc).splitlines()[-1]
+    for flag, words in _FLAG_WORDS.items():
+        if flag in text:
+            return words
+    return text[:200]
 
 
 def simulate_scene(problem, scene: str, spm: float | None = None, stroke=None,
@@ -230,7 +252,7 @@ def simulate_scene(problem, scene: str, spm: float | None = None, stroke=None,
             res = integ(x0=z, p=pk)
         except RuntimeError as exc:
             raise SolverError(f"{opts.method} failed in stroke piece {k + 1} ({piece.label}) of scene {scene!r} at "
-                              f"{spm:g} spm: {str(exc).splitlines()[-1][:200]} (tighten or loosen the tolerances, "
+                              f"{spm:g} spm: {_why(exc)} (tighten or loosen the tolerances, "
                               f"or raise max_num_steps)") from None
         return np.asarray(res["xf"]), int(integ.stats().get("nsteps", 0) or 0)
 
@@ -244,7 +266,7 @@ def simulate_scene(problem, scene: str, spm: float | None = None, stroke=None,
             xf = np.asarray(fine["f"](x0=z0, p=np.concatenate([pk, [sa, sb]]))["xf"])
         except RuntimeError as exc:
             raise SolverError(f"{opts.method} failed between {sa:.6g} and {sb:.6g} of stroke piece {int(pk[0]) + 1} "
-                              f"of scene {scene!r}: {str(exc).splitlines()[-1][:200]}") from None
+                              f"of scene {scene!r}: {_why(exc)}") from None
         fine["nsteps"] += int(fine["f"].stats().get("nsteps", 0) or 0)
         return np.hstack([np.asarray(z0, float)[:, None], xf])
 
