@@ -31,6 +31,20 @@ def test_accuracy_text_with_law_comparison(capsys, reference_path):
         assert law in out
 
 
+def test_accuracy_says_its_torque_is_the_servo_command_not_sizes(capsys, reference_path):
+    # `size` checks the rigid-load peak; accuracy/tradeoff the servo's torque command: both stated, and they differ
+    assert main(["size", str(reference_path), "--spm", "600", "--motor", "055U2B30", "--pulley-teeth", "28",
+                 "--json", "--plot", "none"]) == 0
+    rigid = json.loads(capsys.readouterr().out)["candidates"][0]["peak_torque_N_m"]
+    assert main(["accuracy", str(reference_path), "--spm", "600", "--json", "--plot", "none"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert "torque command" in data["torque_basis"] and "strokeopt size" in data["torque_basis"]
+    assert abs(data["peak_torque_command_N_m"] - rigid) > 1e-3 * rigid
+    assert main(["accuracy", str(reference_path), "--spm", "600", "--plot", "none"]) == 0
+    lines = [ln for ln in capsys.readouterr().out.splitlines() if "rigid-load" in ln]
+    assert len(lines) == 1 and "torque command" in lines[0]
+
+
 def test_accuracy_law_option(capsys, reference_path):
     assert main(["accuracy", str(reference_path), "--law", "poly7", "--json", "--plot", "none"]) == 0
     data = json.loads(capsys.readouterr().out)
@@ -99,6 +113,7 @@ def test_tradeoff_classic_json_and_plot(capsys, reference_path, tmp_path):
     assert pts[0]["max_spm"] <= pts[1]["max_spm"]  # a looser accuracy never costs stitch rate
     assert pts[0]["binding"] == "handover_accuracy"
     assert fig.stat().st_size > 10_000
+    assert "torque command" in data["torque_basis"]
 
 
 @pytest.mark.parametrize("args, words", [

@@ -832,6 +832,12 @@ def plot_accuracy(result: AccuracyResult, path: str | Path | None = None):
 # --------------------------------------------------------------------------- reports
 
 
+#: What the torque of ``accuracy`` and ``tradeoff`` is, and why it differs from ``size``'s (one line of their
+#: text and the ``torque_basis`` of their JSON).
+TORQUE_BASIS = ("torque = the servo's torque command (rigid load + loop dynamics + feed-forward), not the rigid-load "
+                "peak of the commanded stroke that 'strokeopt size' checks, so the two differ near the limit")
+
+
 def accuracy_report(problem, spm: float | None = None, *, compare_laws: bool = False, extra_strokes=(),
                     progress=None) -> tuple[dict, AccuracyResult]:
     """The report of ``strokeopt accuracy``: the prediction for the problem's stroke and, with
@@ -845,6 +851,7 @@ def accuracy_report(problem, spm: float | None = None, *, compare_laws: bool = F
     design = getattr(problem, "design", None)
     requirement = design.accuracy if design is not None else 0.5e-3  # digest A.1: within 0.5 mm
     report = {"problem": problem.name, **result.summary(), "requirement_mm": requirement * 1e3,
+              "torque_basis": TORQUE_BASIS,
               "margins": loop_margins(axis, settings, gains)}
     if compare_laws:
         report["laws"] = residual_vibration_table(problem, spm, extra_strokes, settings=settings, axis=axis,
@@ -898,6 +905,7 @@ def accuracy_text(report: dict) -> str:
         f"{report['max_servo_error_mm']:.4f} mm, max belt stretch {report['max_belt_stretch_mm']:.4f} mm; "
         f"residual belt vibration in the dwell after the handover {report['residual_vibration_mm']:.4f} mm",
         f"peak torque command {report['peak_torque_command_N_m']:.3f} N m (limit {report['torque_limit_N_m']:.2f} N m)",
+        f"  {report['torque_basis']}",
     ]
     if report["torque_limited"]:
         lines.append("WARNING: the torque command exceeds the limit: the drive saturates and the linear prediction "
@@ -1287,7 +1295,7 @@ def tradeoff(problem, accuracies=None, *, strokes: str = "both", resolution: flo
     if strokes in ("both", "optimal"):
         points += tradeoff_optimal(problem, accuracies, resolution=resolution, progress=progress)
     return {"problem": problem.name, "motor": problem.drive.motor, "pulley_teeth": problem.pulley_teeth,
-            "law": problem.default_law.label, "resolution_spm": resolution,
+            "law": problem.default_law.label, "resolution_spm": resolution, "torque_basis": TORQUE_BASIS,
             "points": [p.as_dict() for p in points]}
 
 
@@ -1296,7 +1304,7 @@ def tradeoff_text(report: dict) -> str:
 
     head = (f"{report['problem']}: highest stitch rate for a required handover accuracy "
             f"(motor {report['motor']}, {report['pulley_teeth']}-tooth pulley; classic law {report['law']}; "
-            f"rates to {report['resolution_spm']:g} spm)")
+            f"rates to {report['resolution_spm']:g} spm)\n{report['torque_basis']}")
     return head + "\n\n" + format_table(report["points"], [
         ("accuracy_mm", "accuracy mm"), ("stroke", "stroke"), ("max_spm", "max spm"), ("binding", "binding limit"),
         ("handover_error_mm", "error at max mm")])
