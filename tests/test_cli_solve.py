@@ -5,9 +5,11 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from strokeopt.cli import main
+from strokeopt.design import read_design
 
 ROOT = Path(__file__).resolve().parents[1]
 KNOWN = ROOT / "problems" / "known_optima"
@@ -30,6 +32,8 @@ def test_known_optimum_json(capsys, tmp_path):
     assert data["moves"][0]["index"] == 1
     assert data["moves"][0]["C_a"] == pytest.approx(5.7735, rel=0.005)  # DESIGN.md known optimum
     assert {"v_max_m_s", "a_max_m_s2", "jerk_max_m_s3"} <= set(data["moves"][0])
+    # the convention of `strokeopt kinematics`: stroke_mm >= 0 with a direction
+    assert [(m["stroke_mm"], m["direction"]) for m in data["moves"]] == [(1000, "up"), (1000, "down")]
     rows = {r["law"]: r for r in data["comparison"]}
     assert rows["poly5"]["vs_optimal_pct"] == pytest.approx(0, abs=0.01)  # the optimum is the 3-4-5 law
     assert rows["poly7"]["vs_optimal_pct"] > 0
@@ -57,6 +61,12 @@ def test_text_report_and_out_dir(capsys, tmp_path):
     assert (tmp_path / "f.png").is_file()
     header = (out / "cam_table.csv").read_text().splitlines()[0]
     assert header == "cam_angle_deg,position_mm,velocity_m_s,acceleration_m_s2,motor_angle_deg"
+    # design.json: stroke_mm >= 0 with a direction, and the stroke rebuilt from it goes up then back down
+    data, stroke = read_design(out / "design.json")
+    assert [(m["stroke_mm"], m["direction"]) for m in data["moves"]] == [(1000, "up"), (1000, "down")]
+    ends = [itv["t_start_s"] + itv["duration_s"] for itv in data["intervals"]]
+    assert stroke.evaluate(np.array(ends) - 1e-9).s == pytest.approx([1.0, 0.0], abs=1e-6)
+    assert "1000         up" in text and "1000       down" in text
 
 
 def test_sweep_prints_fastest_feasible_rate(capsys):
@@ -68,6 +78,17 @@ def test_sweep_prints_fastest_feasible_rate(capsys):
     assert "jerk bound needs" in captured.out
     data = _json(capsys, argv + ["--json"])
     assert data["fastest_feasible_spm"] == 36 and [r["spm"] for r in data["rows"]] == [30, 36, 42]
+    assert data["fastest_feasible_is_sweep_end"] is False
+
+
+def test_sweep_that_never_fails_says_the_limit_is_beyond_it(capsys):
+    # every rate feasible: the end of the sweep is a lower bound of the fastest rate, not the fastest rate
+    argv = ["solve", str(KNOWN / "min_jerk.toml"), "--spm", "30:40:10", "--plot", "none"]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "fastest feasible stitch rate: >= 40 spm (the end of the sweep; every rate was feasible)" in out
+    data = _json(capsys, argv + ["--json"])
+    assert data["fastest_feasible_spm"] == 40 and data["fastest_feasible_is_sweep_end"] is True
 
 
 def test_mesh_study(capsys, tmp_path):
@@ -96,3 +117,60 @@ def test_infeasible_exits_1_naming_the_constraint(capsys):
     assert code == 1
     assert err.startswith("strokeopt: failed: move") and "jerk bound needs 32 m/s^3, limit 20 m/s^3" in err
     assert "Ipopt" not in err and "EXIT" not in err
+
+
+def test_comparison_flags_laws_that_break_the_problems_constraints(capsys):
+    # min_jerk.toml holds v = a = 0 at the ends (rest_order = 2): the cubic, cosine and parabolic laws
+    # jump in acceleration at the dwells, so their lower (or infinite) jerk integral is no win
+    data = _json(capsys, ["solve", str(KNOWN / "min_jerk.toml"), "--json", "--plot", "none"])
+    rows = data["comparison"]
+    by_law = {r["law"]: r for r in rows}
+    assert rows[0]["law"] == "optimal" and rows[0]["feasible"] is True and rows[0]["violates"] == []
+    for law in ("parabolic", "cubic", "cosine"):
+        assert by_law[law]["feasible"] is False and by_law[law]["violates"] == ["rest (acceleration)"]
+        assert by_law[law]["jerk_max_m_s3"] is None  # an impulse at the dwells: infinite (null in JSON)
+    for law in ("sine", "poly5", "poly7"):
+        assert by_law[law]["feasible"] is True and by_law[law]["violates"] == []
+    # infeasible laws come last, and no feasible law beats the optimum
+    flags = [r["feasible"] for r in rows]
+    assert flags == sorted(flags, reverse=True)
+    assert all(r["vs_optimal_pct"] >= -1e-6 for r in rows if r["feasible"])
+    # the text table says it on the law's line
+    assert main(["solve", str(KNOWN / "min_jerk.toml"), "--plot", "none"]) == 0
+    text = capsys.readouterr().out
+    cubic = next(line for line in text.splitlines() if line.strip().startswith("cubic"))
+    assert cubic.endswith("no: rest (acceleration)")
+    assert "break the problem's constraints" in text
+
+
+def test_comparison_follows_the_files_rest_order_and_jerk_bound(capsys):
+    # rest_order = 1 lets the acceleration jump at the dwells: the cubic is then allowed; a jerk bound
+    # of 61 m/s^3 (h = 1 m, T = 1 s) rules out the laws whose C_j exceeds 61 (modified sine 69.5)
+    data = _json(capsys, ["solve", str(KNOWN / "min_jerk.toml"), "--set", "design.rest_order=1", "--set",
+                          "design.jerk_max_m_s3=61", "--json", "--plot", "none"])
+    by_law = {r["law"]: r for r in data["comparison"]}
+    assert by_law["cubic"]["feasible"] is True
+    assert by_law["modified_sine (chi = 0.125)"]["violates"] == ["jerk bound"]
+    assert by_law["parabolic"]["violates"] == ["jerk bound"]  # its acceleration jumps mid-move
+    assert by_law["poly5"]["feasible"] is True
+
+
+def test_out_must_be_a_directory_checked_before_solving(capsys, tmp_path):
+    existing = tmp_path / "README.md"
+    existing.write_text("not a directory\n")
+    for out in (existing, existing / "sub"):
+        code = main(["solve", str(KNOWN / "min_jerk.toml"), "--out", str(out), "--plot", str(tmp_path / "f.png")])
+        captured = capsys.readouterr()
+        assert code == 2 and captured.out == ""
+        assert captured.err.count("\n") == 1 and captured.err.startswith("strokeopt: error: --out: ")
+        assert "not a directory" in captured.err and "Traceback" not in captured.err
+    assert not (tmp_path / "f.png").exists()  # nothing solved, nothing drawn
+    assert existing.read_text() == "not a directory\n"
+
+
+def test_infeasible_message_first_line_short_then_details(capsys):
+    code = main(["solve", str(KNOWN / "min_jerk.toml"), "--set", "design.jerk_max_m_s3=20", "--plot", "none"])
+    lines = capsys.readouterr().err.splitlines()
+    assert code == 1
+    assert len(lines[0]) < 120 and "jerk bound needs 32 m/s^3, limit 20 m/s^3 (60.0 % over)" in lines[0]
+    assert lines[1].startswith("  also (move ") and "jerk bound" in lines[1]

@@ -10,8 +10,8 @@ import pytest
 
 from strokeopt import ProblemError, SolverError, load_problem
 from strokeopt.collocation import Mesh, MoveSolution
-from strokeopt.design import (DesignSettings, compare_with_laws, fastest_feasible, read_design, solve_design,
-                              sweep_design)
+from strokeopt.design import (DesignSettings, _term_name, compare_with_laws, fastest_feasible, read_design,
+                              solve_design, sweep_design)
 from strokeopt.drive import drive_checks
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -138,6 +138,24 @@ def test_constraints_hold_between_collocation_nodes(thesis_drive_600):
     for move in design.moves:
         law = problem.timing.intervals[move.interval - 1].law.characteristics
         assert move.jerk_max <= law.C_j * abs(move.stroke) / move.duration**3 * (1 + 1e-6)
+    # the check names read as the tables do: no module names
+    names = [c["name"] for c in design.checks]
+    assert "handover accuracy (servo loop and belt)" in names and not any(".py" in n for n in names)
+
+
+@pytest.mark.slow
+def test_comparison_never_shows_an_infeasible_law_as_beating_the_optimum(thesis_drive_600):
+    problem, design = thesis_drive_600
+    rows = compare_with_laws(design)
+    by_law = {r["law"]: r for r in rows}
+    # cubic and cosine: acceleration jumps at the dwells (rest_order 2) and so an unbounded jerk
+    for law in ("cubic", "cosine"):
+        assert set(by_law[law]["violates"]) >= {"rest (acceleration)", "jerk bound"}
+    assert by_law[problem.default_law.label]["feasible"]  # the bound is the modified sine's own jerk
+    flags = [r["feasible"] for r in rows]
+    assert flags == sorted(flags, reverse=True) and rows[0]["law"] == "optimal"
+    # the optimum beats every law that meets the same constraints (fine-grid tolerance)
+    assert all(r["vs_optimal_pct"] >= -0.5 for r in rows[1:] if r["feasible"])
 
 
 @pytest.mark.slow
@@ -172,8 +190,10 @@ def test_hard_cases_converge_or_fail_cleanly():
     # a 15 deg move at 1000 spm: the belt limits it, said with numbers
     p = load_problem(REFERENCE, FIXED + ['timing.interval_times="nominal"', "machine.spm=1000",
                                          "design.mesh_intervals=20"])
-    with pytest.raises(SolverError, match=r"belt tension needs [\d.]+ N, limit [\d.]+ N"):
+    with pytest.raises(SolverError, match=r"belt_(width|breaking) \(.*\) needs [\d.]+( N)?, limit [\d.]+( N)?") as err:
         solve_design(p)
+    # the names of the checks table (drive.py), not a limit no table shows
+    assert "allowable belt tension" not in str(err.value)
     # a zero-span dwell
     p = load_problem(REFERENCE, FIXED + ['timing.interval_times="nominal"', "timing.intervals[1].span_deg=0",
                                          "timing.intervals[6].span_deg=91.5", "design.mesh_intervals=20"])
@@ -197,6 +217,8 @@ def test_sweep_warm_starts_and_finds_the_fastest_feasible_rate():
     assert [r["feasible"] for r in rows] == [True, True, True, False, False]
     assert fastest_feasible(rows) == 36
     assert "jerk bound needs" in rows[3]["reason"]
+    # the table's "why not" cell is the first line (the worst limit); the rest goes to details
+    assert "\n" not in rows[3]["reason"] and rows[3]["details"][0].startswith("also (move ")
     # the acceleration coefficient grows as the jerk bound tightens
     c = [r["a_max_m_s2"] * (30 / r["spm"]) ** 2 for r in rows if r["feasible"]]
     assert c == sorted(c)
@@ -212,3 +234,8 @@ def test_bonmin_and_enumeration_choose_the_same_motor(capfd):
     assert bonmin.objective_value == pytest.approx(enum.objective_value, rel=1e-4)
     assert any("Bonmin" in n for n in bonmin.notes)
     assert capfd.readouterr().out == ""
+
+
+def test_term_names_drop_the_module():
+    assert _term_name("servo loop and belt (servo.py)") == "servo loop and belt"
+    assert _term_name("encoder (4096 counts)") == "encoder (4096 counts)"

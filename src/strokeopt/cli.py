@@ -406,8 +406,8 @@ def cmd_verify(args) -> int:
 
 
 def cmd_solve(args) -> int:
-    from .design import (OBJECTIVES, compare_with_laws, design_summary, design_text, fastest_feasible, mesh_study,
-                         solve_design, sweep_design)
+    from .design import (OBJECTIVES, check_out_dir, compare_with_laws, design_summary, design_text, fastest_feasible,
+                         mesh_study, solve_design, sweep_design)
     from .plots import plot_design_sweep, plot_kinematics, plot_mesh_study
     from .report import format_table, to_json
 
@@ -423,6 +423,8 @@ def cmd_solve(args) -> int:
         args.spm = None
     if args.objective is not None and args.objective not in OBJECTIVES:
         raise ProblemError("--objective", "", f"{args.objective!r} is not one of {', '.join(OBJECTIVES)}")
+    if args.out is not None:
+        check_out_dir(args.out)  # before the solve, not after it
     problem = _load(args)
     progress = None
     if not args.json:
@@ -446,18 +448,20 @@ def cmd_solve(args) -> int:
         rows = sweep_design(problem, sweep, objective=args.objective,
                          progress=progress and (lambda it: progress(it, "spm")))
         best = fastest_feasible(rows)
+        at_end = best is not None and all(r["feasible"] for r in rows)  # the sweep found no limit
         if args.json:
             _emit(to_json({"problem": problem.name, "objective": args.objective or
                            (problem.design.objective if problem.design else None), "rows": rows,
-                           "fastest_feasible_spm": best}))
+                           "fastest_feasible_spm": best, "fastest_feasible_is_sweep_end": at_end}))
         else:
             print(format_table(rows, [("spm", "spm"), ("feasible", "feasible"), ("objective_value", "objective"),
                                       ("motor", "motor"), ("pulley_teeth", "z"), ("peak_torque_N_m", "peak N m"),
                                       ("rms_torque_N_m", "RMS N m"), ("solve_time_s", "time s"),
                                       ("reason", "why not")],
                                title=f"{problem.name}: optimal design over the stitch rate (warm-started)"))
-            print(f"\nfastest feasible stitch rate: {best:g} spm" if best is not None
-                  else "\nno feasible stitch rate in the sweep")
+            print("\nno feasible stitch rate in the sweep" if best is None else
+                  f"\nfastest feasible stitch rate: >= {best:g} spm (the end of the sweep; every rate was feasible)"
+                  if at_end else f"\nfastest feasible stitch rate: {best:g} spm")
         _write_figure(lambda p: plot_design_sweep(rows, p), _plot_path(args, "solve_sweep"), args)
         return 0
     design = solve_design(problem, objective=args.objective, verbose=args.verbose)

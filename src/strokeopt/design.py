@@ -33,7 +33,7 @@ and by ``strokeopt verify``)::
       "status": "optimal", "motor": "<name or null>", "pulley_teeth": 28,
       "pulley_pitch_diameter_mm": ..., "mesh": {"intervals": 40, "degree": 3},
       "moves": [{"index": 1, "interval": 2, "name": ..., "t_start_s": ...,
-                 "duration_s": ..., "start_position_mm": ..., "stroke_mm": (signed),
+                 "duration_s": ..., "start_position_mm": ..., "stroke_mm": (>= 0), "direction": "up"|"down",
                  "v_max_m_s": ..., "a_max_m_s2": ..., "jerk_max_m_s3": ...,
                  "C_a": ..., "unit_solution": {"S": [...], "V": [...], "A": [[...], ...]}}],
       "intervals": [{"index": 1, "name": ..., "kind": "dwell"|"move",
@@ -243,6 +243,11 @@ class _Limit:
     unit: str
     need: Any
     move: int | None = None
+    check: str = ""  # the name of the same limit in the checks table (drive.py's names), for short messages
+
+    @property
+    def short(self) -> str:
+        return self.check or self.what
 
 
 @dataclass
@@ -435,15 +440,24 @@ class _DriveSetup:
 
     def allowable_belt_force(self, teeth: int | None) -> float | None:
         """Largest effective belt tension [N] the belt checks accept (width and breaking, thesis appendix 2)."""
+        found = self.belt_limit(teeth)
+        return None if found is None else found[1]
+
+    def belt_limit(self, teeth: int | None) -> tuple[str, float, float, str] | None:
+        """The belt check that binds first: (drive.py's check name, allowable tension [N], the check's limit, unit)."""
         if self.belt is None:
             return None
         from .drive import belt_load
 
         grooves = teeth if teeth is not None else self.teeth_range[0]  # conservative for a continuous radius
         unit = belt_load(1.0, grooves, self.belt)  # everything is linear in the tension
-        width = self.belt.belt.width_factor / unit.required_width_factor
-        breaking = self.belt.belt.breaking_tension[self.belt.cord] / unit.breaking_load
-        return min(width, breaking)
+        width_limit = self.belt.belt.width_factor
+        breaking_limit = self.belt.belt.breaking_tension[self.belt.cord]
+        width = width_limit / unit.required_width_factor
+        breaking = breaking_limit / unit.breaking_load
+        if width <= breaking:
+            return "belt_width", width, width_limit, "-"
+        return "belt_breaking", breaking, breaking_limit, "N"
 
     def handover_force(self) -> float:
         """|Effective belt tension| [N] at rest at the handover position (gravity and load forces)."""
@@ -600,7 +614,7 @@ def _add_drive(ctx: _Context, radius0: float | None) -> None:
         motor_name = m.name
     tau_ref = drive.tau_ref  # a scale: the same for every motor, so one solver serves them all
     ctx.extra.update(radius=radius, r_ref=r_ref, tau_ref=tau_ref, trans=trans, rotor=rotor)
-    peak_what = (f"peak torque ({motor_name}: peak {'%.3g' % peak_num} N m"
+    peak_what = (f"peak_torque (peak torque, {motor_name}: {'%.3g' % peak_num} N m"
                  f"{', drive limit %g %% of rated' % drive.limits.peak_limit_pct if pct * (rated_num) < peak_num + 1e-12 and not choice.candidates else ''})")
     nodes = mesh.nodes
     torques, forces = [], []
@@ -628,13 +642,13 @@ def _add_drive(ctx: _Context, radius0: float | None) -> None:
         forces.append(pin_f)
         torques.append(tau)
         lim = _Limit(f"peak torque move {mv.index}", peak_what, peak_num, "N m",
-                     lambda sig, pl=peak_num, tr=tau_ref: pl + sig * tr, mv.index)
+                     lambda sig, pl=peak_num, tr=tau_ref: pl + sig * tr, mv.index, "peak_torque")
         b.limit_abs(lim, tau * (tau_ref / peak_lim))
         # speed: |v| / r <= the motor's rated speed
         omega = v / radius
         rpm = 60 / (2 * math.pi)
-        lim = _Limit(f"speed move {mv.index}", f"motor speed ({motor_name}: rated)", speed_num * rpm, "rpm",
-                     lambda sig, sp=speed_num * rpm: sp * (1 + sig), mv.index)
+        lim = _Limit(f"speed move {mv.index}", f"peak_speed (motor speed, {motor_name}: rated)", speed_num * rpm,
+                     "rpm", lambda sig, sp=speed_num * rpm: sp * (1 + sig), mv.index, "peak_speed")
         b.limit_abs(lim, omega / speed)
         # integral of torque squared over the move (Gauss-Legendre points)
         # accumulated along the move in a chain of variables, one link per mesh interval: a single
@@ -660,25 +674,29 @@ def _add_drive(ctx: _Context, radius0: float | None) -> None:
     if dwell_tau:
         tau_d = ca.vertcat(*dwell_tau)
         lim = _Limit("peak torque dwells", peak_what + " holding in the dwells", peak_num, "N m",
-                     lambda sig, pl=peak_num, tr=tau_ref: pl + sig * tr)
+                     lambda sig, pl=peak_num, tr=tau_ref: pl + sig * tr, None, "peak_torque")
         b.limit_abs(lim, tau_d * (tau_ref / peak_lim))
     mean_sq = sum_sq + dwell_sq  # (RMS torque / tau_ref)^2
-    lim = _Limit("RMS torque", f"RMS torque ({motor_name}: rated torque)", rated_num, "N m",
-                 lambda sig, r=rated_num, tr=tau_ref: math.sqrt(r**2 + sig * tr**2))
+    lim = _Limit("RMS torque", f"rms_torque (RMS torque, {motor_name}: rated torque)", rated_num, "N m",
+                 lambda sig, r=rated_num, tr=tau_ref: math.sqrt(r**2 + sig * tr**2), None, "rms_torque")
     b.limit(lim, mean_sq - (rated / tau_ref) ** 2)
     ctx.extra.update(torques=torques, dwell_torques=dwell_tau, mean_sq=mean_sq, move_sq=sum_sq, period=sch.period)
     ctx.extra["period"] = sch.period
     # belt tension
-    f_allow = drive.allowable_belt_force(choice.teeth)
-    if f_allow is not None:
+    belt = drive.belt_limit(choice.teeth)
+    if belt is not None:
+        # the tension the belt checks allow; said in the units of the check that binds (drive.py's names)
+        check, f_allow, belt_lim, belt_unit = belt
         allf = ca.horzcat(*[ca.reshape(f, 1, -1) for f in forces]) / b.param("belt force limit", f_allow)
-        lim = _Limit("belt tension", "allowable belt tension", f_allow, "N", lambda sig, fa=f_allow: fa * (1 + sig))
+        what = {"belt_width": "belt_width (width factor the belt tension requires)",
+                "belt_breaking": "belt_breaking (belt tension with safety factor, against the breaking load)"}[check]
+        lim = _Limit("belt tension", what, belt_lim, belt_unit, lambda sig, bl=belt_lim: bl * (1 + sig), None, check)
         b.limit_abs(lim, allf)
     # inertia ratio (only a constraint when the radius is free)
     if choice.teeth is None and not choice.candidates:
         reflected = inertia + drive.load.moving_mass * radius**2
-        lim = _Limit("inertia ratio", "load/rotor inertia ratio", drive.limits.max_inertia_ratio, "-",
-                     lambda sig, mr=drive.limits.max_inertia_ratio: mr * (1 + sig))
+        lim = _Limit("inertia ratio", "inertia_ratio (load/rotor inertia ratio)", drive.limits.max_inertia_ratio,
+                     "-", lambda sig, mr=drive.limits.max_inertia_ratio: mr * (1 + sig), None, "inertia_ratio")
         b.limit(lim, reflected / (rotor * drive.limits.max_inertia_ratio) - 1.0)
     # handover accuracy: the error terms registered in HANDOVER_ERROR_TERMS (servo.py)
     terms = ([t for t in (term(ctx) for term in HANDOVER_ERROR_TERMS) if t is not None]
@@ -988,6 +1006,11 @@ def stroke_from_solutions(problem, spm: float, solutions: list[MoveSolution], la
     return StrokeFunction(sch.period, pieces, label=label)
 
 
+def _direction(stroke: float) -> str:
+    """``up`` or ``down``: the convention of :func:`strokeopt.report.kinematics_summary` (stroke_mm >= 0)."""
+    return "up" if stroke > 0 else "down"
+
+
 @dataclass(frozen=True)
 class MoveResult:
     """One optimised move: SI peaks and the unit-form collocation solution."""
@@ -1009,7 +1032,8 @@ class MoveResult:
         return {
             "index": self.index, "interval": self.interval, "name": self.name,
             "t_start_s": self.t_start, "duration_s": self.duration,
-            "start_position_mm": self.start * 1e3, "stroke_mm": self.stroke * 1e3,
+            "start_position_mm": self.start * 1e3, "stroke_mm": abs(self.stroke) * 1e3,
+            "direction": _direction(self.stroke),
             "v_max_m_s": self.v_max, "a_max_m_s2": self.a_max, "jerk_max_m_s3": self.jerk_max, "C_a": self.C_a,
         }
 
@@ -1037,6 +1061,7 @@ class Design:
     motor: str | None = None
     notes: list[str] = field(default_factory=list)
     motor_spec: Any = field(default=None, repr=False)  # the ServoMotor
+    settings: Any = field(default=None, repr=False)  # the DesignSettings it was solved with
 
     @property
     def solutions(self) -> list[MoveSolution]:
@@ -1114,6 +1139,31 @@ class Design:
         return [p_json, p_csv]
 
 
+def check_out_dir(path: str | Path, option: str = "--out") -> Path:
+    """Check before a solve that ``path`` is a directory or can be created as one (:meth:`Design.write`).
+
+    Raises :class:`ProblemError` naming ``option`` otherwise, so a long solve does not end on a bad path.
+    """
+    import os
+
+    out = Path(path)
+    if out.exists():
+        if not out.is_dir():
+            raise ProblemError(option, "", f"{str(path)!r} exists and is not a directory: give a directory "
+                                           "(design.json and cam_table.csv are written into it)")
+        if not os.access(out, os.W_OK):
+            raise ProblemError(option, "", f"directory {str(path)!r} is not writable")
+        return out
+    parent = out.absolute().parent
+    while not parent.exists():
+        parent = parent.parent
+    if not parent.is_dir():
+        raise ProblemError(option, "", f"cannot create directory {str(path)!r}: {str(parent)!r} is not a directory")
+    if not os.access(parent, os.W_OK):
+        raise ProblemError(option, "", f"cannot create directory {str(path)!r}: {str(parent)!r} is not writable")
+    return out
+
+
 def read_design(path: str | Path) -> tuple[dict, StrokeFunction]:
     """Read a ``design.json``: its data and the exact optimal :class:`StrokeFunction` rebuilt from it."""
     import json
@@ -1137,7 +1187,8 @@ def read_design(path: str | Path) -> tuple[dict, StrokeFunction]:
                 m = moves[itv["index"]]
                 u = m["unit_solution"]
                 sol = MoveSolution(mesh, np.asarray(u["S"], float), np.asarray(u["V"], float), np.asarray(u["A"], float))
-                pieces.append(move_piece(t0, dur, pos, m["stroke_mm"] * 1e-3, sol, f"{itv['name']}: optimal"))
+                sign = {"up": 1.0, "down": -1.0, None: 1.0}[m.get("direction")]  # older files: stroke_mm signed
+                pieces.append(move_piece(t0, dur, pos, sign * m["stroke_mm"] * 1e-3, sol, f"{itv['name']}: optimal"))
             else:
                 pieces.append(dwell_piece(t0, dur, pos, itv["name"]))
         stroke = StrokeFunction(float(data["cycle_time_s"]), pieces, label="optimal")
@@ -1390,6 +1441,7 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
                     best.status, wall, best.iterations, fine_grid=best.fine, pulley_teeth=teeth, pitch_diameter=pd,
                     motor=None if motor is None else motor.name, notes=notes)
     design.motor_spec = motor
+    design.settings = settings
     design.checks, design.active_constraints = _report_checks(best, design)
     if drive is not None:
         # the objective as the fine grid reads it (the NLP saw the nodes)
@@ -1496,8 +1548,13 @@ def _choose_parts(problem, spm, settings, mesh, objective, warm, drive: _DriveSe
     if not results:
         if len(failures) == 1:
             raise failures[0][1]
-        reasons = "; ".join(f"{m.name}: {e.reason}" for m, e in failures)
-        raise SolverError(f"no motor of the catalogue can drive this design at {spm:g} spm ({reasons})")
+        # the motor that comes closest first; one line per motor after it
+        failures.sort(key=lambda f: getattr(f[1], "excess", math.inf))
+        m0, e0 = failures[0]
+        lines = [f"no motor of the catalogue can drive this design at {spm:g} spm; closest {m0.name}: "
+                 f"{getattr(e0, 'short', e0.reason.splitlines()[0])}"]
+        lines += [f"  {m.name}: {getattr(e, 'short', e.reason.splitlines()[0])}" for m, e in failures]
+        raise SolverError("\n".join(lines))
     best, teeth = min(results, key=lambda r: r[0].value)
     if len(motors) > 1:
         notes.append(f"motor chosen among {len(motors)} by enumeration ({len(failures)} infeasible): "
@@ -1543,7 +1600,7 @@ def _check_static_accuracy(problem, settings, drive) -> None:
     fixed = [(n, v) for n, v in terms if isinstance(v, (int, float))]
     total = sum(v for _, v in fixed)
     if total > settings.accuracy:
-        parts = ", ".join(f"{n} {v * 1e3:.3f} mm" for n, v in fixed)
+        parts = ", ".join(f"{_term_name(n)} {v * 1e3:.3f} mm" for n, v in fixed)
         raise SolverError(f"handover accuracy cannot be met: {parts} exceeds the allowed "
                           f"{settings.accuracy * 1e3:g} mm by {(total - settings.accuracy) * 1e3:.3f} mm")
 
@@ -1562,7 +1619,7 @@ def _report_checks(best: _Outcome, design: "Design") -> tuple[list[dict], list[s
     for name, value in ctx.extra.get("handover_terms", []):
         v = float(value) if isinstance(value, (int, float)) else float(_value(ctx, value, best.x).item())
         acc = ctx.settings.accuracy
-        checks.append({"name": f"handover accuracy ({name})", "value": v * 1e3, "limit": acc * 1e3, "unit": "mm",
+        checks.append({"name": f"handover accuracy ({_term_name(name)})", "value": v * 1e3, "limit": acc * 1e3, "unit": "mm",
                        "margin": 1.0 - v / acc, "ok": bool(v <= acc)})
     active = []
     # active limit groups: the largest scaled residual of each group within 1e-4 of its bound
@@ -1574,6 +1631,13 @@ def _report_checks(best: _Outcome, design: "Design") -> tuple[list[dict], list[s
         if itv.handover:
             active.append(f"handover position: end of move {mv.index} at {(mv.start + mv.stroke) * 1e3:g} mm (exact)")
     return checks, active
+
+
+def _term_name(name: str) -> str:
+    """A handover error term's name as a reader sees it: without the module that registered it ("(servo.py)")."""
+    import re
+
+    return re.sub(r"\s*\([\w.]+\.py\)", "", name).strip()
 
 
 def _limit_values(ctx: _Context, x: np.ndarray) -> list[float]:
@@ -1597,25 +1661,40 @@ def _diagnose(problem, spm, settings, mesh, objective, drive, choice, status, op
         return SolverError(f"the design problem at {spm:g} spm{where} could not be solved (IPOPT: {status}); "
                            f"even with every limit relaxed: check the timing and the rest conditions")
     x = np.asarray(sol["x"]).ravel()
-    worst = None
+    violated = []  # (relative excess, limit group, slack), worst first
     for lim, slack in ctx.built.limits:
         sig = float(_value(ctx, slack, x).item()) if slack is not None else 0.0
-        if sig > 1e-6 and (worst is None or sig > worst[1]):
-            worst = (lim, sig)
-    if worst is None:
+        if sig > 1e-6:
+            need = lim.need(sig)
+            violated.append((need / lim.limit - 1 if lim.limit else math.inf, lim, need))
+    if not violated:
         return SolverError(f"IPOPT did not converge at {spm:g} spm{where} ({status}) although the limits can be met: "
                            f"try more mesh intervals, or --verbose to see the solver log")
-    lim, sig = worst
-    need = lim.need(sig)
-    over = f"{100 * (need / lim.limit - 1):.1f} % over" if lim.limit else ""
-    unit = lim.unit
-    shown_need, shown_lim = need, lim.limit
-    if unit == "m":
-        shown_need, shown_lim, unit = need * 1e3, lim.limit * 1e3, "mm"
+    violated.sort(key=lambda v: -v[0])
+    excess, lim, need = violated[0]
     subject = f"move {lim.move} too short" if lim.move is not None else "the design cannot meet the limits"
     motor = f" for motor {choice.motor.name}" if choice is not None and choice.motor is not None else ""
-    return SolverError(f"{subject}{motor} at {spm:g} spm: {lim.what} needs {shown_need:.4g} {unit}, "
-                       f"limit {shown_lim:.4g} {unit} ({over})")
+    lines = [f"{subject}{motor} at {spm:g} spm: {_need_text(lim, need, lim.what)}"]
+    seen = {lim.name}
+    for _, other, other_need in violated[1:]:
+        if other.name not in seen and len(seen) < 5:
+            seen.add(other.name)
+            where_ = f" (move {other.move})" if other.move is not None else ""
+            lines.append(f"  also{where_}: {_need_text(other, other_need, other.what)}")
+    err = SolverError("\n".join(lines))
+    err.excess = excess  # relative excess of the worst limit: ranks the motors of a catalogue search
+    err.short = _need_text(lim, need, lim.short)
+    return err
+
+
+def _need_text(lim: _Limit, need: float, name: str) -> str:
+    """``<name> needs X <unit>, limit Y <unit> (Z % over)``: a violated limit group and by how much."""
+    over = f" ({100 * (need / lim.limit - 1):.1f} % over)" if lim.limit else ""
+    unit, shown_need, shown_lim = lim.unit, need, lim.limit
+    if unit == "m":
+        shown_need, shown_lim, unit = need * 1e3, lim.limit * 1e3, "mm"
+    unit = "" if unit == "-" else f" {unit}"
+    return f"{name} needs {shown_need:.4g}{unit}, limit {shown_lim:.4g}{unit}{over}"
 
 
 # --------------------------------------------------------------------------- comparison and report
@@ -1645,8 +1724,11 @@ def _stroke_measures(design: "Design", stroke: StrokeFunction, samples: int = 20
         trans = drive.transmission(design.pulley_teeth) if design.pulley_teeth else \
             BeltPulley(design.pitch_diameter, inertia=float(drive.pulley_inertia(design.pitch_diameter)))
         k = stroke.sample(samples)
-        checks = {c.name: c.value for c in drive_checks(design.motor_spec, trans, drive.load, k.t, k.s, k.v, k.a,
-                                                         limits=drive.limits)}
+        grooves = design.pulley_teeth if design.pulley_teeth else drive.teeth_range[0]
+        found = drive_checks(design.motor_spec, trans, drive.load, k.t, k.s, k.v, k.a, limits=drive.limits,
+                             belt=drive.belt, grooves=grooves)
+        checks = {c.name: c.value for c in found}
+        row["_failed"] = [c.name for c in found if c.name in _ENFORCED and not c.ok]
         tau = load_torque(design.motor_spec, trans, drive.load, k.s, k.v, k.a).total
         moving = np.zeros_like(k.t, dtype=bool)
         for itv, t0, dur in zip(problem.timing.intervals, sch.t_start, sch.duration):
@@ -1668,7 +1750,11 @@ def compare_with_laws(design: "Design", laws=None) -> list[dict]:
 
     ``laws``: MotionLaw objects (default: every classic law, the problem's own law with its parameters).
     Each row: law, peak acceleration and jerk, integrals, peak and RMS torque (with a drive), and
-    ``vs_optimal_pct``: how much larger the law's value of the design's objective measure is.
+    ``vs_optimal_pct``: how much larger the law's value of the design's objective measure is;
+    ``feasible`` and ``violates``: whether the law meets the design problem's own constraints (rest
+    order, jerk bounds, drive.py's enforced checks on the design's motor and pulley; the laws'
+    handover accuracy is not checked) and which it breaks. The optimum comes first, then the
+    feasible laws, then the infeasible ones: a law that breaks a constraint does not beat the optimum.
     """
     from .laws import LAW_NAMES
 
@@ -1677,17 +1763,57 @@ def compare_with_laws(design: "Design", laws=None) -> list[dict]:
         own = problem.default_law
         laws = [own if name == own.name else make_law(name) for name in LAW_NAMES]
     measure = _MEASURE_OF.get(design.objective)
+    settings = design.settings or getattr(problem, "design", None) or DesignSettings()
     opt = {"law": "optimal", **_stroke_measures(design, design.stroke)}
+    opt.pop("_failed", None)  # the design's own checks (fine grid) say whether it is feasible
+    failed = [c["name"] for c in design.checks if not c["ok"]]
+    opt.update(feasible=not failed, violates=failed)
     rows = [opt]
     for law in laws:
         stroke = problem.with_law(law).stroke(design.spm)
-        rows.append({"law": law.label, **_stroke_measures(design, stroke)})
+        row = {"law": law.label, **_stroke_measures(design, stroke)}
+        violates = _law_violations(problem, design.spm, settings, law) + row.pop("_failed", [])
+        if law.characteristics.continuity < 2:  # the acceleration jumps at the dwells: the jerk is an impulse
+            row.update(jerk_max_m_s3=math.inf, jerk_squared=math.inf)
+        row.update(feasible=not violates, violates=violates)
+        rows.append(row)
     for r in rows:
         base = opt.get(measure) if measure else None
         val = r.get(measure) if measure else None
         r["vs_optimal_pct"] = (100.0 * (val / base - 1.0) if base and val is not None and math.isfinite(val)
                                else None)
-    return rows
+    # a law that breaks the problem's constraints does not compete with the optimum: listed last
+    return [opt] + [r for r in rows[1:] if r["feasible"]] + [r for r in rows[1:] if not r["feasible"]]
+
+
+_REST_NAMES = {1: "rest (velocity)", 2: "rest (acceleration)", 3: "rest (jerk)"}
+
+
+def _law_violations(problem, spm: float, settings: DesignSettings, law) -> list[str]:
+    """The constraints of the design problem (rest order, jerk bounds) a classic law breaks on its moves."""
+    out = []
+    c = law.characteristics
+    if c.continuity < settings.rest_order:
+        # the first derivative that does not vanish at the dwells (the design holds 1..rest_order at zero)
+        out.append(_REST_NAMES[c.continuity + 1])
+    c_j = c.C_j
+    if settings.rest_order < 2 and math.isinf(c_j):
+        # the design itself may jump in acceleration at the dwells (rest_order 1): only the jerk inside counts
+        from .laws import _peak
+
+        inner = law.derivatives([x + d for x in law.breaks for d in (-1e-9, 1e-9)] or [0.5], 2)[2]
+        jumps = np.abs(inner[0::2] - inner[1::2]) if law.breaks else np.zeros(1)
+        c_j = math.inf if np.max(jumps) > 1e-6 * (c.C_a + 1.0) else _peak(law, 3)
+    for mv in _moves(problem, spm, settings):
+        if mv.jerk_bound is not None and c_j * mv.j_scale > mv.jerk_bound * (1 + settings.check_tolerance):
+            out.append("jerk bound")
+            break
+    return out
+
+
+def feasible_text(row: dict) -> str:
+    """``yes``, or ``no: `` and the constraints a comparison row breaks."""
+    return "yes" if row.get("feasible", True) else "no: " + ", ".join(row.get("violates") or ["?"])
 
 
 def design_text(design: "Design", comparison: list[dict] | None = None) -> str:
@@ -1703,6 +1829,7 @@ def design_text(design: "Design", comparison: list[dict] | None = None) -> str:
     lines.append("")
     lines.append(format_table([m.to_dict() for m in design.moves],
                               [("index", "move"), ("name", "interval"), ("stroke_mm", "stroke mm"),
+                               ("direction", "direction"),
                                ("duration_s", "time s"), ("v_max_m_s", "v_max m/s"), ("a_max_m_s2", "a_max m/s2"),
                                ("jerk_max_m_s3", "jerk_max m/s3"), ("C_a", "C_a")]))
     if design.checks:
@@ -1717,9 +1844,18 @@ def design_text(design: "Design", comparison: list[dict] | None = None) -> str:
         if "peak_torque_N_m" in comparison[0]:
             cols += [("peak_torque_N_m", "peak torque N m"), ("rms_torque_N_m", "RMS torque N m")]
         cols.append(("vs_optimal_pct", f"{design.objective} vs optimal %"))
+        cols.append(("feasible_text", "feasible"))
         lines.append("")
         motor = f" with {design.motor}, {design.pulley_teeth} teeth" if design.motor else ""
-        lines.append(format_table(comparison, cols, title=f"comparison with the classic laws{motor}"))
+        shown = [{**r, "feasible_text": feasible_text(r)} for r in comparison]
+        lines.append(format_table(shown, cols, title=f"comparison with the classic laws{motor}"))
+        if any(not r.get("feasible", True) for r in comparison):
+            lines.append("laws marked 'no' break the problem's constraints (listed last): a lower value there "
+                         "does not beat the optimum")
+        if comparison[0].get("peak_torque_N_m") is not None and design.checks and any(
+                c["name"].startswith("handover accuracy") for c in design.checks):
+            lines.append("feasible: rest order, jerk bound and drive checks; the laws' handover accuracy is not "
+                         "checked")
     for note in design.notes:
         lines.append(f"note: {note}")
     return "\n".join(lines)
@@ -1742,7 +1878,8 @@ def design_summary(design: "Design") -> dict:
         "peak_torque_N_m": checks["peak_torque"]["value"] if "peak_torque" in checks else None,
         "rms_torque_N_m": checks["rms_torque"]["value"] if "rms_torque" in checks else None,
         "moves": [{"index": m.index, "v_max_m_s": m.v_max, "a_max_m_s2": m.a_max, "jerk_max_m_s3": m.jerk_max,
-                   "C_a": m.C_a, "duration_s": m.duration, "stroke_mm": m.stroke * 1e3} for m in design.moves],
+                   "C_a": m.C_a, "duration_s": m.duration, "stroke_mm": abs(m.stroke) * 1e3,
+                   "direction": _direction(m.stroke)} for m in design.moves],
         "active_constraints": design.active_constraints,
         "solve_time_s": design.solve_time_s,
     }
@@ -1768,7 +1905,9 @@ def sweep_design(problem, spms, *, objective: str | None = None, settings: Desig
         try:
             d = solve_design(problem, objective=objective, spm=spm, settings=settings, warm_start=warm)
         except SolverError as exc:
-            rows.append({"spm": float(spm), "feasible": False, "reason": exc.reason,
+            first, *rest = exc.reason.splitlines()  # the first line says the worst limit; details follow
+            rows.append({"spm": float(spm), "feasible": False, "reason": first,
+                         **({"details": [r.strip() for r in rest]} if rest else {}),
                          "solve_time_s": time.perf_counter() - t0})
             continue
         warm = d
