@@ -258,3 +258,25 @@ def test_tradeoff_optimal_names_its_limit_and_resimulates(reference):
     assert pt.binding != "solver" and pt.detail
     # the design at the highest rate, re-simulated with the full loop model, meets the accuracy
     assert pt.handover_error is not None and pt.handover_error <= 0.5e-3
+
+
+def test_tradeoff_figure_plain_ticks_words_and_labels_inside():
+    import matplotlib.pyplot as plt
+
+    from strokeopt.servo import plot_tradeoff
+
+    pts = [{"accuracy_mm": a, "stroke": kind, "max_spm": spm + extra, "binding": b}
+           for kind, extra in (("modified_sine", 0), ("optimal", 40))
+           for a, spm, b in ((0.05, 480, "handover_accuracy"), (0.1, 830, "handover_accuracy"),
+                             (0.2, 850, "torque_limit"), (0.5, 850, "torque_limit"))]
+    fig = plot_tradeoff({"problem": "p", "points": pts})
+    ax = fig.axes[0]
+    fig.canvas.draw()
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["0.05", "0.1", "0.2", "0.5"]
+    area = ax.get_window_extent()
+    for text in ax.texts:
+        assert "_" not in text.get_text()
+        box = text.get_window_extent()
+        assert area.x0 <= box.x0 and box.x1 <= area.x1  # no label runs off the plot
+    assert {t.get_text() for t in ax.get_legend().get_texts()} == {"modified sine", "optimal"}
+    plt.close(fig)

@@ -255,3 +255,69 @@ def test_scene_of_the_driven_body_alone(problem):
     assert r.stats["nsteps"] == 0 and r.metrics["impact_velocity_m_s"] is None
     a_max = max(np.max(np.abs(problem.stroke(600).sample(20001).a)), 1.0)
     assert r.metrics["peak_drive_force_N"] == pytest.approx(81.7e-3 * a_max, rel=1e-3)
+
+
+# --------------------------------------------------------------------------- figures (looked at, then pinned)
+
+
+def _visible_tick_labels(ax, fig):
+    """The drawn x tick labels inside the axes' view: (text, window extent)."""
+    fig.canvas.draw()
+    lo, hi = ax.get_xlim()
+    out = []
+    for tick in ax.xaxis.get_major_ticks() + ax.xaxis.get_minor_ticks():
+        label = tick.label1
+        if label.get_visible() and label.get_text() and lo <= tick.get_loc() <= hi:
+            out.append((label.get_text(), label.get_window_extent()))
+    return out
+
+
+def test_scene_figure_names_events_in_the_legend_not_on_the_curves(release):
+    import matplotlib.pyplot as plt
+
+    fig = release[600].plot()
+    axes = fig.axes
+    assert all(not ax.texts for ax in axes)  # no free text lying on the curves
+    labels = axes[0].get_legend().get_texts()
+    names = [t.get_text() for t in labels]
+    m = release[600].metrics
+    assert f"impact {m['impact_angle_deg']:.1f} deg" in names and f"lag end {m['lag_end_angle_deg']:.1f} deg" in names
+    plt.close(fig)
+
+
+def test_sweep_figure_names_the_lag_onset_in_a_legend():
+    import matplotlib.pyplot as plt
+
+    from strokeopt.plots import plot_sweep
+
+    rows = [{"scene": "release", "spm": s, "impact_velocity_m_s": 1 + s / 500, "min_gap_N_mm": 8 - s / 150,
+             "lag": s >= 350} for s in (300, 350, 400, 450)]
+    fig = plot_sweep(rows)
+    assert not fig.axes[0].texts
+    assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()] == ["follower lags from 350 spm"]
+    plt.close(fig)
+
+
+def test_tolerance_figure_readable_ticks_and_legend_off_the_data():
+    import matplotlib.pyplot as plt
+
+    from strokeopt.plots import plot_tolerance_study
+
+    rows = []
+    for method, switching, eps in (("cvodes", "hard", 0.0), ("idas", "hard", 0.0), ("cvodes", "smoothed", 1e-3),
+                                   ("cvodes", "restarts", 0.0)):
+        for k, cpu in enumerate((0.17, 0.31, 0.62, 1.4, 2.9)):
+            rows.append({"method": method, "switching": switching, "smoothing_mm": eps, "cpu_time_s": cpu,
+                         "impact_velocity_error_m_s": 1e-3 / 10**k, "release_angle_error_deg": 1e-2 / 10**k})
+    fig = plot_tolerance_study({"scene": "release", "spm": 600, "rows": rows})
+    for ax in fig.axes:
+        ticks = _visible_tick_labels(ax, fig)
+        assert len(ticks) >= 2
+        for text, _ in ticks:
+            float(text)  # plain decimals, no 2\times10^{-1} mathtext
+        boxes = sorted((b for _, b in ticks), key=lambda b: b.x0)
+        assert all(a.x1 < b.x0 for a, b in zip(boxes, boxes[1:]))  # no two labels overlap
+        assert ax.get_legend() is None
+    legend = fig.legends[0].get_window_extent()
+    assert all(legend.y1 < ax.get_window_extent().y0 for ax in fig.axes)  # below the plots
+    plt.close(fig)

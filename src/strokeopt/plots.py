@@ -131,19 +131,15 @@ def plot_scene(r, path=None):
     else:
         ax.plot(ang, r.drive_force, color="tab:gray", label="drive force")
         ax.set_ylabel("drive force [N]")
-    ax.legend(fontsize=8, loc="best")
+    # the event lines are named in the legends (placed clear of the data), not by text on the curves
     for ax in axes:
         ax.grid(True, alpha=0.3)
-        for key, color, text in (("impact_angle_deg", "tab:red", "impact"), ("release_angle_deg", "tab:green", "release"),
-                                 ("lag_end_angle_deg", "tab:orange", "lag end")):
+        for key, color, text in (("lag_end_angle_deg", "tab:orange", "lag end"), ("impact_angle_deg", "tab:red", "impact"),
+                                 ("release_angle_deg", "tab:green", "release")):
             if m.get(key) is not None:
-                ax.axvline(m[key], color=color, ls="--", lw=1)
-    for row, (key, color, text) in enumerate((("lag_end_angle_deg", "tab:orange", "lag end"),
-                                              ("impact_angle_deg", "tab:red", "impact"),
-                                              ("release_angle_deg", "tab:green", "release"))):
-        if m.get(key) is not None:
-            axes[0].annotate(f"{text} {m[key]:.1f} deg", (m[key], 1.0), xycoords=("data", "axes fraction"),
-                             xytext=(3, -12 - 11 * row), textcoords="offset points", color=color, fontsize=8)
+                ax.axvline(m[key], color=color, ls="--", lw=1, label=f"{text} {m[key]:.1f} deg")
+    axes[0].legend(fontsize=8, loc="best")
+    axes[2].legend(fontsize=8, loc="best")
     lo = m.get("lag_onset_angle_deg") or 0.0
     axes[-1].set_xlim(max(0.0, min(lo, 20.0) - 5), 90.0)
     axes[-1].set_xlabel("cam angle [deg]")
@@ -171,10 +167,9 @@ def plot_sweep(rows: list[dict], path=None):
     for ax in axes:
         ax.grid(True, alpha=0.3)
         if onset is not None:
-            ax.axvline(onset, color="tab:orange", ls="--", lw=1)
+            ax.axvline(onset, color="tab:orange", ls="--", lw=1, label=f"follower lags from {onset:g} spm")
     if onset is not None:
-        axes[0].annotate(f"lag from {onset:g} spm", (onset, 0.05), xycoords=("data", "axes fraction"),
-                         xytext=(4, 0), textcoords="offset points", color="tab:orange")
+        axes[0].legend(fontsize=8, loc="best")  # named in a legend placed clear of the curve
     axes[1].set_xlabel("speed [spm]")
     axes[0].set_title(f"scene {rows[0]['scene']}: speed sweep" if rows else "speed sweep")
     if path is not None:
@@ -199,12 +194,19 @@ def plot_tolerance_study(study: dict, path=None):
             ax.loglog(cpu, [max(r[key], 1e-12) if r[key] is not None else np.nan for r in rows], "o-", label=label)
     axes[0].set_ylabel("impact velocity error [m/s]")
     axes[1].set_ylabel("release angle error [deg]")
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
     for ax in axes:
         ax.set_xlabel("CPU time [s]")
         ax.grid(True, which="both", alpha=0.3)
+        # plain decimals at 1, 2, 5 x 10^k; unlabelled minor ticks (a few tenths of a decade otherwise overlap)
+        ax.xaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+        ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.xaxis.set_minor_formatter(NullFormatter())
     axes[0].axhline(1e-3, color="0.5", ls=":", lw=1)
     axes[1].axhline(0.1, color="0.5", ls=":", lw=1)
-    axes[0].legend(fontsize=8)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=8)  # below the plots, off the data
     fig.suptitle(f"work-precision, scene {study['scene']} at {study['spm']:g} spm")
     if path is not None:
         fig.savefig(path, dpi=120)

@@ -1310,6 +1310,11 @@ def tradeoff_text(report: dict) -> str:
         ("handover_error_mm", "error at max mm")])
 
 
+def _words(name: str) -> str:
+    """An identifier as words for a figure: 'handover_accuracy' -> 'handover accuracy'."""
+    return str(name).replace("_", " ")
+
+
 def plot_tradeoff(report: dict, path: str | Path | None = None):
     """Highest stitch rate over the required handover accuracy, one line per stroke, binding limits marked."""
     import matplotlib.pyplot as plt
@@ -1323,12 +1328,21 @@ def plot_tradeoff(report: dict, path: str | Path | None = None):
             continue
         x = [p["accuracy_mm"] for p in pts]
         y = [p["max_spm"] for p in pts]
-        line, = ax.plot(x, y, lw=1.4, label=kind)
+        line, = ax.plot(x, y, lw=1.4, label=_words(kind))
+        right = max(x)
         for p in pts:
             ax.plot(p["accuracy_mm"], p["max_spm"], markers.get(p["binding"], "x"), color=line.get_color())
-            ax.annotate(p["binding"], (p["accuracy_mm"], p["max_spm"]), xytext=(4, -10), textcoords="offset points",
-                        fontsize=7, color=line.get_color())
+            last = p["accuracy_mm"] == right  # the rightmost label goes to the left of its point, inside the axes
+            ax.annotate(_words(p["binding"]), (p["accuracy_mm"], p["max_spm"]), xytext=(-4 if last else 4, -10),
+                        textcoords="offset points", fontsize=7, color=line.get_color(), ha="right" if last else "left")
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter
+
     ax.set_xscale("log")
+    # ticks at the requested accuracies, as plain decimals (0.05, 0.1, 0.2), not 6e-2 / 2e-1
+    ax.xaxis.set_major_locator(FixedLocator(sorted({p["accuracy_mm"] for p in report["points"]})))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.margins(x=0.06)
     ax.set_xlabel("required handover accuracy [mm]")
     ax.set_ylabel("highest stitch rate [spm]")
     ax.set_title(f"{report['problem']}: what accuracy costs in stitch rate")
