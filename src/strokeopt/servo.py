@@ -1196,7 +1196,8 @@ def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step
 
 
 def _binding_of(reason: str) -> str:
-    text = reason.lower()
+    """The limit a failed design names first (its first line names the worst violated limit)."""
+    text = (reason.splitlines() or [""])[0].lower().replace("_", " ")
     for key, name in (("handover accuracy", "handover_accuracy"), ("torque limit", "torque_limit"),
                       ("rms", "rms_torque"), ("peak torque", "peak_torque"),
                       ("speed", "peak_speed"), ("belt", "belt_tension"), ("jerk", "jerk"), ("inertia", "inertia_ratio")):
