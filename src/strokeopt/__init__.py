@@ -8,11 +8,11 @@ The data flow::
         -> StrokeFunction     s, v, a, jerk as CasADi Functions:   laws.py, stroke.py
                               a classic law or a collocation
                               solution
+        -> Drive              transmission + motor + load: torque, transmission.py,
+                              speed, checks; catalogue sizing      actuators.py, drive.py
         -> Design             direct collocation of every move:   design.py,
                               optimal stroke, pulley and motor,    collocation.py
                               constraint report, design.json
-        -> Drive              transmission + motor + load: torque, transmission.py,
-                              speed, checks; catalogue sizing      actuators.py, drive.py
         -> Scene simulation   contact model as data; a scene's     model.py, scene.py,
                               CasADi ODE, CVODES over one cycle:   simulate.py
                               impact, lag, gap N, needle release

@@ -498,8 +498,8 @@ def build_parser() -> argparse.ArgumentParser:
         prog="strokeopt",
         description="Design servo-driven reciprocating mechanisms (electronic cams): motion laws, "
                     "kinematics, drive sizing, optimal strokes and contact-model verification.",
-        epilog="Start with: strokeopt kinematics problems/deco2000_needle_bar.toml  "
-               "(each command has --help).",
+        epilog="Start with: strokeopt solve problems/deco2000_needle_bar.toml  "
+               "(each command has --help with an example).",
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     problem = _problem_parent()
