@@ -165,6 +165,8 @@ def test_accuracy_uses_the_drive_of_the_design(capsys, reference_path, tmp_path)
     assert main(["accuracy", str(reference_path), "--design", str(path), "--json", "--plot", "none"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["drive_from_design"]["pulley_teeth"] == 22
+    # the headline of the design is its own row, not the problem's law
+    assert data["design"]["law"].startswith("optimal") and data["design"]["handover_error_mm"] > 0
     assert data["drive_from_design"]["motor"] == data["motor"] == z22.drive.motor
     assert data["pulley_pitch_diameter_mm"] == pytest.approx(22 * 3 / 3.141592653589793, rel=1e-3)  # GT3: 3 mm pitch
     # the optimal row is the design's stroke on the design's drive

@@ -235,12 +235,18 @@ def cmd_accuracy(args) -> int:
             return tqdm(items, desc="laws", unit="law", file=sys.stderr, leave=False)
     report, result = accuracy_report(problem, problem.spm, compare_laws=args.compare_laws or bool(extra),
                                      extra_strokes=extra, progress=progress)
+    head = ""
     if args.design:
         report["drive_from_design"] = {"design": str(args.design), **drive_used}
+        row = next(r for r in report["laws"] if r["law"] == extra[0][0])
+        report["design"] = row  # the design's own prediction; the top-level numbers are the problem's law
+        head = (f"design {args.design}: handover error {row['handover_error_mm']:.4f} mm (largest over the handover "
+                f"window), residual belt vibration {row['residual_vibration_mm']:.4f} mm; the detailed prediction "
+                f"below is for the problem's own law, the design is the row '{row['law']}' of the table\n")
     if args.json:
         _emit(to_json(report))
     else:
-        print(accuracy_text(report))
+        print(head + accuracy_text(report))
     _write_figure(lambda p: result.plot(p), _plot_path(args, "accuracy"), args)
     return 0
 
