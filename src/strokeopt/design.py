@@ -244,6 +244,7 @@ class _Limit:
     need: Any
     move: int | None = None
     check: str = ""  # the name of the same limit in the checks table (drive.py's names), for short messages
+    enforced: bool = True  # False: the rows exist (same NLP structure) but their bound is infinite
 
     @property
     def short(self) -> str:
@@ -276,6 +277,14 @@ class _Built:
         self.p.append(sym)
         self.pvals.append(float(value))
         return sym
+
+    def params(self, name: str, values) -> ca.MX:
+        """A matrix of numbers entering the NLP as parameters (its shape is part of the structure)."""
+        values = np.atleast_2d(np.asarray(values, dtype=float))
+        sym = ca.MX.sym(name, values.size)
+        self.p.append(sym)
+        self.pvals.extend(values.ravel(order="F").tolist())
+        return ca.reshape(sym, values.shape[0], values.shape[1])
 
     def var(self, name: str, shape, lb, ub, x0) -> ca.MX:
         """A matrix symbol; ``lb``, ``ub``, ``x0`` are scalars or arrays of ``shape``."""
@@ -319,7 +328,7 @@ class _Built:
         if self.relaxed:
             slack = self.var(f"slack {lim.name}", (1, 1), 0.0, np.inf, 0.0)
             expr = expr - slack
-        self.constrain(lim.name, expr, -np.inf, 0.0)
+        self.constrain(lim.name, expr, -np.inf, 0.0 if lim.enforced else np.inf)
         self.limits.append((lim, slack))
 
 
@@ -566,19 +575,24 @@ def _add_drive(ctx: _Context, radius0: float | None) -> None:
     from .drive import load_torque
 
     b, drive, choice, mesh = ctx.built, ctx.drive, ctx.choice, ctx.mesh
-    # the pulley radius: fixed, or a decision variable scaled by a reference radius
+    # The pulley radius is a decision variable scaled by a reference radius: free between the
+    # catalogue's bounds, or held at a tooth count's radius by equal bounds. A fixed pulley's
+    # inertia is its catalogue value: the inertia model times a parameter (catalogue / model).
+    # Both cases are one NLP structure, so one built solver serves the whole catalogue search.
+    lo, hi = drive.radius_bounds()
+    r_ref = float(np.sqrt(lo * hi))
     if choice.teeth is not None:
         pulley = drive.pulley(choice.teeth)
-        radius = b.param("radius", pulley.radius)
-        inertia = b.param("pulley inertia", pulley.inertia if ctx.settings.include_pulley_inertia else 0.0)
-        r_ref = pulley.radius
+        r_lo = r_hi = r_start = pulley.radius
+        model = float(drive.pulley_inertia(pulley.pitch_diameter))
+        factor = (pulley.inertia / model if model > 0 else 0.0) if ctx.settings.include_pulley_inertia else 0.0
     else:
-        lo, hi = choice.radius_bounds
-        r_ref = float(np.sqrt(lo * hi))
-        start = radius0 if radius0 is not None else ctx.problem.transmission.radius
-        rho = b.var("radius", (1, 1), lo / r_ref, hi / r_ref, float(np.clip(start, lo, hi)) / r_ref)
-        radius = rho * r_ref
-        inertia = drive.pulley_inertia(2 * radius)
+        r_lo, r_hi = choice.radius_bounds or (lo, hi)
+        r_start = float(np.clip(radius0 if radius0 is not None else ctx.problem.transmission.radius, r_lo, r_hi))
+        factor = 1.0
+    rho = b.var("radius", (1, 1), r_lo / r_ref, r_hi / r_ref, r_start / r_ref)
+    radius = rho * r_ref
+    inertia = b.param("pulley inertia factor", factor) * drive.pulley_inertia(2 * radius)
     trans = _SizedBelt(radius, inertia)
     # the motor: fixed, or a Bonmin choice among candidates (binary weights)
     pct = drive.limits.peak_limit_pct / 100
@@ -692,11 +706,12 @@ def _add_drive(ctx: _Context, radius0: float | None) -> None:
                 "belt_breaking": "belt_breaking (belt tension with safety factor, against the breaking load)"}[check]
         lim = _Limit("belt tension", what, belt_lim, belt_unit, lambda sig, bl=belt_lim: bl * (1 + sig), None, check)
         b.limit_abs(lim, allf)
-    # inertia ratio (only a constraint when the radius is free)
-    if choice.teeth is None and not choice.candidates:
+    # inertia ratio: a constraint only when the radius is free (a chosen pulley is checked, not held)
+    if not choice.candidates:
         reflected = inertia + drive.load.moving_mass * radius**2
         lim = _Limit("inertia ratio", "inertia_ratio (load/rotor inertia ratio)", drive.limits.max_inertia_ratio,
-                     "-", lambda sig, mr=drive.limits.max_inertia_ratio: mr * (1 + sig), None, "inertia_ratio")
+                     "-", lambda sig, mr=drive.limits.max_inertia_ratio: mr * (1 + sig), None, "inertia_ratio",
+                     enforced=choice.teeth is None)
         b.limit(lim, reflected / (rotor * drive.limits.max_inertia_ratio) - 1.0)
     # handover accuracy: the error terms registered in HANDOVER_ERROR_TERMS (servo.py)
     terms = ([t for t in (term(ctx) for term in HANDOVER_ERROR_TERMS) if t is not None]
@@ -720,9 +735,11 @@ def _switch_positions(drive: _DriveSetup) -> list[float]:
 def _pins(ctx: _Context, k: int, mv: _Move, rotor, trans):
     """Torque and belt force (row vectors) on both sides of every load switch the move passes.
 
-    The point is given by parameters (interval one-hot ``e``, basis rows at the local time), so
-    moving it does not change the NLP's structure. ``ctx.extra["pin_times"]`` holds the unit
-    times (None: not crossed, the point is switched off by a zero weight).
+    The point is the mesh interval holding the crossing (part of the NLP's structure: its rows
+    touch that interval's variables only) and the local time inside it (parameters: the basis
+    rows at that time), so moving the point within its interval keeps the built solver.
+    ``ctx.extra["pin_times"]`` holds the unit times (None: not crossed, the point is switched
+    off by a zero weight).
     """
     from .drive import load_torque
 
@@ -733,21 +750,16 @@ def _pins(ctx: _Context, k: int, mv: _Move, rotor, trans):
         if not lo < pos < hi:
             continue
         tau_c = ctx.extra.setdefault("pin_times", {}).get((k, pos))
-        e_val = np.zeros(mesh.intervals)
-        la_val = np.zeros(mesh.degree + 1)
-        lv_val = np.zeros(mesh.degree + 1)
-        weight = 0.0
+        idx, theta, weight = 0, 0.0, 0.0
         if tau_c is not None:
             idx = min(int(tau_c / mesh.h), mesh.intervals - 1)
-            theta = tau_c / mesh.h - idx
-            m = mesh.matrices([theta])
-            e_val[idx], la_val, lv_val, weight = 1.0, m["a"][0], m["v"][0], 1.0
-        e = ca.vertcat(*[b.param(f"pin e{k}.{pos}.{i}", v) for i, v in enumerate(e_val)])
-        la = ca.vertcat(*[b.param(f"pin a{k}.{pos}.{i}", v) for i, v in enumerate(la_val)])
-        lv = ca.vertcat(*[b.param(f"pin v{k}.{pos}.{i}", v) for i, v in enumerate(lv_val)])
+            theta, weight = tau_c / mesh.h - idx, 1.0
+        m = mesh.matrices([theta])
+        la = b.params(f"pin a{k}.{pos}", m["a"][0])  # 1 x (d+1) basis rows
+        lv = b.params(f"pin v{k}.{pos}", m["v"][0])
         w = b.param(f"pin w{k}.{pos}", weight)
-        a_unit = ca.mtimes(e.T, ca.mtimes(x.A, la))
-        v_unit = ca.mtimes(e.T, x.V[:-1]) + mesh.h * ca.mtimes(e.T, ca.mtimes(x.A, lv))
+        a_unit = ca.mtimes(la, x.A[idx, :].T)
+        v_unit = x.V[idx] + mesh.h * ca.mtimes(lv, x.A[idx, :].T)
         v = v_unit * mv.stroke / ctx.T[k]
         a = a_unit * mv.stroke / ctx.T[k] ** 2
         eps = 1e-9 * max(abs(mv.stroke), 1e-3)
@@ -756,6 +768,7 @@ def _pins(ctx: _Context, k: int, mv: _Move, rotor, trans):
             taus.append(w * terms.total)
             forces.append(w * terms.load_force)
         ctx.extra.setdefault("pins", []).append((k, pos))
+        ctx.extra.setdefault("pin_intervals", []).append(idx if tau_c is not None else None)
     return (ca.horzcat(*taus) if taus else ca.MX(1, 0)), (ca.horzcat(*forces) if forces else ca.MX(1, 0))
 
 
@@ -878,9 +891,9 @@ def _structure_key(ctx: _Context, options: dict) -> tuple:
     choice = ctx.choice
     return (id(ctx.problem), repr(ctx.settings), ctx.mesh, ctx.extra.get("objective"), ctx.built.relaxed,
             repr(sorted(options.items())), tuple(mv.jerk_bound is None for mv in ctx.moves),
-            None if choice is None else (choice.teeth is None, choice.radius_bounds,
-                                         tuple(m.name for m in choice.candidates)),
-            ctx.drive is not None and ctx.drive.belt is None, len(ctx.built.p), ctx.built.n_w, ctx.built.n_g)
+            None if choice is None else tuple(m.name for m in choice.candidates),
+            ctx.drive is not None and ctx.drive.belt is None, tuple(ctx.extra.get("pin_intervals", ())),
+            len(ctx.built.p), ctx.built.n_w, ctx.built.n_g)
 
 
 def _solve_nlp(ctx: _Context, f, options: dict):
@@ -1331,7 +1344,14 @@ def _objective_value(ctx: _Context, sol, x) -> float:
     return float(sol["f"]) if expr is None else float(_value(ctx, expr, x).item())
 
 
-def _same_time(a, b, tol: float = 1e-6) -> bool:
+#: A pinned point (a load switch, see _pins) counts as in place when it moved less than this
+#: between two solves [unit time of the move; 1e-4 of a 10 ms move is 1 us]. A pin that far off
+#: reads the torque jump within about (jerk x time / acceleration) x 1e-4 of its size, some
+#: 1e-3 relative, below ``check_tolerance``; the fine grid reads the true peak after the solve.
+_PIN_TOLERANCE = 1e-4
+
+
+def _same_time(a, b, tol: float = _PIN_TOLERANCE) -> bool:
     return (a is None and b is None) or (a is not None and b is not None and abs(a - b) <= tol)
 
 
@@ -1624,7 +1644,7 @@ def _report_checks(best: _Outcome, design: "Design") -> tuple[list[dict], list[s
     active = []
     # active limit groups: the largest scaled residual of each group within 1e-4 of its bound
     for (lim, _), g in zip(ctx.built.limits, _limit_values(ctx, best.x)):
-        if g > -1e-4:
+        if lim.enforced and g > -1e-4:
             active.append(lim.name)
     for mv in ctx.moves:
         itv = ctx.problem.timing.intervals[mv.interval - 1]
@@ -1663,7 +1683,7 @@ def _diagnose(problem, spm, settings, mesh, objective, drive, choice, status, op
     x = np.asarray(sol["x"]).ravel()
     violated = []  # (relative excess, limit group, slack), worst first
     for lim, slack in ctx.built.limits:
-        sig = float(_value(ctx, slack, x).item()) if slack is not None else 0.0
+        sig = float(_value(ctx, slack, x).item()) if slack is not None and lim.enforced else 0.0
         if sig > 1e-6:
             need = lim.need(sig)
             violated.append((need / lim.limit - 1 if lim.limit else math.inf, lim, need))

@@ -1035,7 +1035,7 @@ def servo_handover_error(ctx):
         sigma = (t0 + (np.arange(n).reshape(-1, 1) + x_q.reshape(1, -1)) * dur / n).ravel(order="F")
         w = np.tile(w_q, (n, 1)).ravel(order="F") * dur / n
         weights = kernel(t_check.reshape(-1, 1) + kernel.delay - sigma.reshape(1, -1)) * w.reshape(1, -1)
-        w_sym = _vector_param(b, f"servo kernel move {mv.index}", weights)
+        w_sym = b.params(f"servo kernel move {mv.index}", weights)
         a = ca.vec(ctx.si(k, x_q, "a"))  # column-major: the same order as sigma
         errors = errors + ca.mtimes(w_sym, a)
     load = b.param("servo load error", _load_error(problem, settings, axis, gains, spm))
@@ -1049,17 +1049,6 @@ def servo_handover_error(ctx):
 #: IPOPT fail on tight accuracies (0.05 mm at 600 spm: iteration limit); ``strokeopt accuracy``
 #: re-checks the whole window.
 WINDOW_POINTS = 0
-
-
-def _vector_param(built, name: str, values: np.ndarray):
-    """A matrix of numbers entering the NLP as parameters (one built solver serves other speeds)."""
-    import casadi as ca
-
-    values = np.atleast_2d(np.asarray(values, dtype=float))
-    sym = ca.MX.sym(name, values.size)
-    built.p.append(sym)
-    built.pvals.extend(values.ravel(order="F").tolist())
-    return ca.reshape(sym, values.shape[0], values.shape[1])
 
 
 _TUNED: dict = {}
