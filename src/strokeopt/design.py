@@ -244,69 +244,112 @@ class _Limit:
     need: Any
     move: int | None = None
     check: str = ""  # the name of the same limit in the checks table (drive.py's names), for short messages
-    enforced: bool = True  # False: the rows exist (same NLP structure) but their bound is infinite
+    #: False, or a function of the solve's context returning False: the rows exist (one NLP
+    #: structure for every solve) but their bound is infinite
+    enforced: Any = True
 
     @property
     def short(self) -> str:
         return self.check or self.what
 
+    def is_enforced(self, ctx) -> bool:
+        return bool(self.enforced(ctx) if callable(self.enforced) else self.enforced)
+
+
+def _number(value, ctx) -> np.ndarray:
+    """A bound, start value or parameter of the NLP: a number, or a function of the solve's context."""
+    return np.asarray(value(ctx) if callable(value) else value, dtype=float)
+
+
+@dataclass
+class _Numbers:
+    """What one solve gives a built NLP: parameter values, start point and bounds."""
+
+    p: np.ndarray
+    x0: np.ndarray
+    lbx: np.ndarray
+    ubx: np.ndarray
+    lbg: np.ndarray
+    ubg: np.ndarray
+
 
 @dataclass
 class _Built:
-    """Symbols and bookkeeping of one NLP."""
+    """Symbols of one NLP structure, and how each solve's numbers are found.
+
+    The symbolic NLP (and its solver, with the costly derivatives) is built once per
+    structure (:func:`_structure_key`); everything that changes between solves of
+    one structure (speed, motor, pulley, pinned points, warm start) is a parameter
+    value, a bound or a start value, each given as a function of the solve's
+    :class:`_Context` and evaluated by :meth:`numbers`.
+    """
 
     relaxed: bool = False
     w: list = field(default_factory=list)
-    lbw: list = field(default_factory=list)
-    ubw: list = field(default_factory=list)
-    w0: list = field(default_factory=list)
+    vars: list = field(default_factory=list)  # (shape, lb, ub, x0): numbers or functions of the context
     g: list = field(default_factory=list)
-    lbg: list = field(default_factory=list)
-    ubg: list = field(default_factory=list)
+    cons: list = field(default_factory=list)  # (size, lb, ub)
     limits: list = field(default_factory=list)  # (_Limit, slack symbol or None)
     limit_exprs: list = field(default_factory=list)  # the scaled expressions (<= 0) of the limit groups
     offsets: dict = field(default_factory=dict)  # variable name -> (offset, size) in the decision vector
     p: list = field(default_factory=list)  # parameters: numbers that change between solves of one structure
-    pvals: list = field(default_factory=list)
+    p_values: list = field(default_factory=list)  # (function of the context, shape)
     n_w: int = 0
     n_g: int = 0
 
-    def param(self, name: str, value: float) -> ca.MX:
-        """A number the NLP takes as a parameter (speed, part data), so one built solver serves many solves."""
-        sym = ca.MX.sym(name)
-        self.p.append(sym)
-        self.pvals.append(float(value))
-        return sym
+    def param(self, name: str, value) -> ca.MX:
+        """A number the NLP takes as a parameter, ``value(ctx)`` for each solve: one built solver serves many."""
+        return self.params(name, value, (1, 1))
 
-    def params(self, name: str, values) -> ca.MX:
-        """A matrix of numbers entering the NLP as parameters (its shape is part of the structure)."""
-        values = np.atleast_2d(np.asarray(values, dtype=float))
-        sym = ca.MX.sym(name, values.size)
+    def params(self, name: str, value, shape: tuple[int, int]) -> ca.MX:
+        """A matrix of parameters of ``shape``, ``value(ctx)`` for each solve."""
+        if not callable(value):
+            raise TypeError(f"parameter {name!r}: give a function of the solve's context, not a number "
+                            f"(a number would be frozen into the built solver)")
+        sym = ca.MX.sym(name, shape[0] * shape[1])
         self.p.append(sym)
-        self.pvals.extend(values.ravel(order="F").tolist())
-        return ca.reshape(sym, values.shape[0], values.shape[1])
+        self.p_values.append((value, shape))
+        return ca.reshape(sym, *shape)
 
     def var(self, name: str, shape, lb, ub, x0) -> ca.MX:
-        """A matrix symbol; ``lb``, ``ub``, ``x0`` are scalars or arrays of ``shape``."""
+        """A matrix symbol; ``lb``, ``ub``, ``x0`` are scalars or arrays of ``shape``, or functions of the context."""
         x = ca.MX.sym(name, *shape)
         self.w.append(ca.vec(x))
         self.offsets[name] = (self.n_w, shape[0] * shape[1])
         self.n_w += shape[0] * shape[1]
-        for store, val in ((self.lbw, lb), (self.ubw, ub), (self.w0, x0)):
-            arr = np.asarray(val, dtype=float)
-            arr = np.broadcast_to(arr.reshape(shape) if arr.size == shape[0] * shape[1] else arr, shape)
-            store.append(arr.ravel(order="F").copy())  # ca.vec is column-major
+        self.vars.append((tuple(shape), lb, ub, x0))
         return x
 
     def constrain(self, name: str, expr, lb, ub) -> None:
+        """Rows ``lb <= expr <= ub``; the bounds are numbers or functions of the context."""
         expr = ca.vec(expr)
         n = expr.shape[0]
         if n == 0:
             return
         self.g.append(expr)
-        self.lbg.append(np.broadcast_to(np.asarray(lb, dtype=float), (n,)).copy())
-        self.ubg.append(np.broadcast_to(np.asarray(ub, dtype=float), (n,)).copy())
+        self.cons.append((n, lb, ub))
         self.n_g += n
+
+    def numbers(self, ctx) -> _Numbers:
+        """Parameter values, start point and bounds of one solve."""
+        pv = []
+        for (fn, shape), sym in zip(self.p_values, self.p):
+            val = _number(fn, ctx)
+            if val.size != sym.numel():
+                raise ValueError(f"parameter {sym.name()} has {val.size} values, built with {sym.numel()}")
+            pv.append(val.reshape(shape).ravel(order="F") if val.ndim == 2 else val.ravel())
+        xs = ([], [], [])
+        for shape, *vals in self.vars:
+            for store, val in zip(xs, vals):
+                arr = _number(val, ctx)
+                arr = np.broadcast_to(arr.reshape(shape) if arr.size == shape[0] * shape[1] else arr, shape)
+                store.append(arr.ravel(order="F"))  # ca.vec is column-major
+        gs = ([], [])
+        for n, *vals in self.cons:
+            for store, val in zip(gs, vals):
+                store.append(np.broadcast_to(_number(val, ctx), (n,)))
+        cat = (lambda parts: np.concatenate(parts) if parts else np.zeros(0))
+        return _Numbers(cat(pv), cat(xs[2]), cat(xs[0]), cat(xs[1]), cat(gs[0]), cat(gs[1]))
 
     def limit_abs(self, lim: _Limit, expr) -> None:
         """``|expr| <= 1`` (scaled) as one two-sided row each; relaxed: ``|expr| <= 1 + sigma``."""
@@ -328,7 +371,7 @@ class _Built:
         if self.relaxed:
             slack = self.var(f"slack {lim.name}", (1, 1), 0.0, np.inf, 0.0)
             expr = expr - slack
-        self.constrain(lim.name, expr, -np.inf, 0.0 if lim.enforced else np.inf)
+        self.constrain(lim.name, expr, -np.inf, lambda c: 0.0 if lim.is_enforced(c) else np.inf)
         self.limits.append((lim, slack))
 
 
@@ -492,6 +535,8 @@ class _Context:
     choice: DriveChoice | None = None
     extra: dict = field(default_factory=dict)
     T: list = field(default_factory=list)  # move durations (parameters)
+    graph: Any = None  # the built structure (_Graph)
+    numbers: Any = None  # this solve's parameter values, start point and bounds (_Numbers)
 
     def si(self, m: int, theta, kind: str) -> ca.MX:
         """Values of move ``m`` at local points ``theta`` of every interval (N x len(theta)) in SI units."""
@@ -502,75 +547,136 @@ class _Context:
         return unit * (mv.stroke / self.T[m] ** {"v": 1, "a": 2, "j": 3}[kind])
 
 
-def _add_moves(b: _Built, problem, spm, settings, mesh, objective, warm) -> tuple[list, list, list]:
-    moves = _moves(problem, spm, settings)
-    xs = []
-    durations = [b.param(f"T{mv.index}", mv.duration) for mv in moves]
+def _start_values(mesh: Mesh, settings: DesignSettings, warm: list | None, k: int) -> tuple:
+    """Start point of move ``k``: the warm start's solution on the same mesh, else the 3-4-5 law."""
+    if warm is not None and k < len(warm) and warm[k].mesh == mesh:
+        return warm[k].S, warm[k].V, warm[k].A
+    return _initial_unit(mesh, settings.rest_order)
+
+
+def _add_moves(ctx: _Context) -> None:
+    b, settings, mesh, moves = ctx.built, ctx.settings, ctx.mesh, ctx.moves
     n, d = mesh.intervals, mesh.degree
+    ctx.T = [b.param(f"T{mv.index}", lambda c, k=k: c.moves[k].duration) for k, mv in enumerate(moves)]
     for k, mv in enumerate(moves):
-        if warm is not None and k < len(warm) and warm[k].mesh == mesh:
-            y0, v0, A = warm[k].S, warm[k].V, warm[k].A
-            a_init, a0_init = A[:, 1:], A[0, 0]
-        else:
-            y0, v0, a_nodes = _initial_unit(mesh, settings.rest_order)
-            a_init, a0_init = a_nodes[:, 1:], a_nodes[0, 0]
         s_lb, s_ub = np.full(n + 1, -np.inf), np.full(n + 1, np.inf)
         s_lb[0] = s_ub[0] = 0.0
         s_lb[-1] = s_ub[-1] = 1.0  # the end position is met exactly (the handover, for the handover move)
         v_lb, v_ub = np.full(n + 1, -np.inf), np.full(n + 1, np.inf)
         v_lb[[0, -1]] = v_ub[[0, -1]] = 0.0
-        S = b.var(f"S{mv.index}", (n + 1, 1), s_lb, s_ub, y0)
-        V = b.var(f"V{mv.index}", (n + 1, 1), v_lb, v_ub, v0)
+        S = b.var(f"S{mv.index}", (n + 1, 1), s_lb, s_ub, lambda c, k=k: c.extra["start"][k][0])
+        V = b.var(f"V{mv.index}", (n + 1, 1), v_lb, v_ub, lambda c, k=k: c.extra["start"][k][1])
         rest = settings.rest_order >= 2
         a0 = b.var(f"a0_{mv.index}", (1, 1), 0.0 if rest else -np.inf, 0.0 if rest else np.inf,
-                   0.0 if rest else a0_init)
+                   0.0 if rest else (lambda c, k=k: c.extra["start"][k][2][0, 0]))
         a_lb, a_ub = np.full((n, d), -np.inf), np.full((n, d), np.inf)
         if rest:
             a_lb[-1, -1] = a_ub[-1, -1] = 0.0
-        Acol = b.var(f"A{mv.index}", (n, d), a_lb, a_ub, a_init)
+        Acol = b.var(f"A{mv.index}", (n, d), a_lb, a_ub, lambda c, k=k: c.extra["start"][k][2][:, 1:])
         x = MoveVariables(mesh, S, V, a0, Acol)
-        xs.append(x)
+        ctx.vars.append(x)
         b.constrain(f"move {mv.index} collocation", x.defects(), 0.0, 0.0)
         if settings.rest_order >= 3:
             b.constrain(f"move {mv.index} rest (jerk)", ca.vertcat(x.at([0.0], "j")[0, 0], x.at([1.0], "j")[-1, 0]),
                         0.0, 0.0)
-        if settings.rest_order >= 3 or objective == "min_snap":
+        if settings.rest_order >= 3 or ctx.extra["objective"] == "min_snap":
             b.constrain(f"move {mv.index} jerk continuity", x.jerk_joints(), 0.0, 0.0)
         if mv.jerk_bound is not None:
-            jb = b.param(f"jerk bound {mv.index}", mv.jerk_bound / mv.j_scale)  # bound on the unit jerk
+            # the bound on the unit jerk
+            jb = b.param(f"jerk bound {mv.index}", lambda c, k=k: c.moves[k].jerk_bound / c.moves[k].j_scale)
             hull = x.hull("j") / jb  # Bernstein coefficients: bounds the jerk everywhere, not only at nodes
             lim = _Limit(f"jerk bound move {mv.index}", "jerk bound", mv.jerk_bound, "m/s^3",
                          lambda sig, jb=mv.jerk_bound: jb * (1 + sig), mv.index)
             b.limit_abs(lim, hull)
-    return moves, xs, durations
+
+
+@dataclass
+class _Graph:
+    """One built NLP structure: symbols, the objective, structure-level extras, its solvers by options."""
+
+    problem: Any
+    built: _Built
+    vars: list
+    T: list
+    extra: dict
+    f: Any
+    solvers: dict = field(default_factory=dict)
+
+
+_GRAPHS: dict = {}  # structure key -> _Graph; see _build
+_GRAPH_CACHE_SIZE = 16
+
+
+def clear_cache() -> None:
+    """Forget every built NLP and solver (a benchmark times builds with this)."""
+    _GRAPHS.clear()
 
 
 def _build(problem, spm: float, settings: DesignSettings, mesh: Mesh, objective: str, warm: list | None,
            drive: _DriveSetup | None = None, choice: DriveChoice | None = None, relaxed: bool = False,
            radius0: float | None = None, pin_times: dict | None = None, enforce_accuracy: bool = False,
            with_terms: bool = True):
-    b = _Built(relaxed=relaxed)
-    moves, xs, durations = _add_moves(b, problem, spm, settings, mesh, objective, warm)
-    ctx = _Context(problem, settings, mesh, moves, xs, b, drive, choice, T=durations)
-    ctx.extra["spm"] = spm
-    ctx.extra["pin_times"] = dict(pin_times or {})
-    ctx.extra["enforce_accuracy"] = enforce_accuracy or relaxed
-    ctx.extra["with_terms"] = with_terms or relaxed
+    """The NLP of one solve: the built structure (from the cache when one fits) and this solve's numbers."""
+    moves = _moves(problem, spm, settings)
+    ctx = _Context(problem, settings, mesh, moves, [], _Built(relaxed=relaxed), drive, choice)
+    e = ctx.extra
+    e.update(spm=spm, objective=objective, warm=warm, radius0=radius0, relaxed=relaxed,
+             enforce_accuracy=enforce_accuracy or relaxed, with_terms=with_terms or relaxed,
+             period=float(problem.timing.period(spm)))
+    e["cache"] = {}  # numbers a parameter function computes once per solve
+    e["schedule"] = problem.timing.schedule(spm)
+    e["start"] = [_start_values(mesh, settings, warm, k) for k in range(len(moves))]
+    e["pin_times"] = dict(pin_times or {})
     if drive is not None and pin_times is None and warm is None:
         y0, v0, a_nodes = _initial_unit(mesh, settings.rest_order)
-        ctx.extra["pin_times"] = _initial_pin_times(ctx, drive, [MoveSolution(mesh, y0, v0, a_nodes)] * len(moves))
+        e["pin_times"] = _initial_pin_times(ctx, drive, [MoveSolution(mesh, y0, v0, a_nodes)] * len(moves))
     if drive is not None and pin_times is None and warm is not None and all(w.mesh == mesh for w in warm):
-        ctx.extra["pin_times"] = _initial_pin_times(ctx, drive, warm)
-    if drive is not None:
-        _add_drive(ctx, radius0)
-    ctx.extra["objective"] = objective
-    f = _objective(ctx, objective)
-    if relaxed:
+        e["pin_times"] = _initial_pin_times(ctx, drive, warm)
+    e["pins"] = _pin_points(ctx) if drive is not None else []
+    key = _structure_key(ctx)
+    graph = _GRAPHS.get(key)
+    if graph is None or graph.problem is not problem:
+        graph = _build_graph(ctx)
+        if not relaxed:  # a relaxed build names the motor in its limits: built for the one diagnosis
+            if len(_GRAPHS) >= _GRAPH_CACHE_SIZE:
+                _GRAPHS.pop(next(iter(_GRAPHS)))
+            _GRAPHS[key] = graph
+    ctx.graph, ctx.built, ctx.vars, ctx.T = graph, graph.built, graph.vars, graph.T
+    for name, value in graph.extra.items():
+        e.setdefault(name, value)
+    ctx.numbers = graph.built.numbers(ctx)
+    return ctx, graph.f
+
+
+def _build_graph(ctx: _Context) -> _Graph:
+    """Build the symbolic NLP of ``ctx``'s structure."""
+    per_solve = set(ctx.extra)
+    _add_moves(ctx)
+    if ctx.drive is not None:
+        _add_drive(ctx)
+    b = ctx.built
+    f = _objective(ctx, ctx.extra["objective"])
+    if b.relaxed:
         f = sum(s for _, s in b.limits if s is not None) * 1e3 + 1e-6 * f
-    return ctx, f
+    extra = {k: v for k, v in ctx.extra.items() if k not in per_solve}
+    return _Graph(ctx.problem, b, ctx.vars, ctx.T, extra, f)
 
 
-def _add_drive(ctx: _Context, radius0: float | None) -> None:
+def _pulley_setting(ctx: _Context) -> tuple[float, float, float, float]:
+    """This solve's pulley: radius bounds, start radius [m] and the inertia factor (catalogue / model)."""
+    drive, choice = ctx.drive, ctx.choice
+    if choice.teeth is not None:
+        pulley = drive.pulley(choice.teeth)
+        model = float(drive.pulley_inertia(pulley.pitch_diameter))
+        factor = (pulley.inertia / model if model > 0 else 0.0) if ctx.settings.include_pulley_inertia else 0.0
+        return pulley.radius, pulley.radius, pulley.radius, factor
+    lo, hi = choice.radius_bounds or drive.radius_bounds()
+    radius0 = ctx.extra.get("radius0")
+    start = float(np.clip(radius0 if radius0 is not None else ctx.problem.transmission.radius, lo, hi))
+    return lo, hi, start, 1.0
+
+
+def _add_drive(ctx: _Context) -> None:
     """Motor torque, speed, belt tension and inertia limits at every node (drive.py's load model)."""
     from .drive import load_torque
 
@@ -581,18 +687,10 @@ def _add_drive(ctx: _Context, radius0: float | None) -> None:
     # Both cases are one NLP structure, so one built solver serves the whole catalogue search.
     lo, hi = drive.radius_bounds()
     r_ref = float(np.sqrt(lo * hi))
-    if choice.teeth is not None:
-        pulley = drive.pulley(choice.teeth)
-        r_lo = r_hi = r_start = pulley.radius
-        model = float(drive.pulley_inertia(pulley.pitch_diameter))
-        factor = (pulley.inertia / model if model > 0 else 0.0) if ctx.settings.include_pulley_inertia else 0.0
-    else:
-        r_lo, r_hi = choice.radius_bounds or (lo, hi)
-        r_start = float(np.clip(radius0 if radius0 is not None else ctx.problem.transmission.radius, r_lo, r_hi))
-        factor = 1.0
-    rho = b.var("radius", (1, 1), r_lo / r_ref, r_hi / r_ref, r_start / r_ref)
+    rho = b.var("radius", (1, 1), lambda c: _pulley_setting(c)[0] / r_ref, lambda c: _pulley_setting(c)[1] / r_ref,
+                lambda c: _pulley_setting(c)[2] / r_ref)
     radius = rho * r_ref
-    inertia = b.param("pulley inertia factor", factor) * drive.pulley_inertia(2 * radius)
+    inertia = b.param("pulley inertia factor", lambda c: _pulley_setting(c)[3]) * drive.pulley_inertia(2 * radius)
     trans = _SizedBelt(radius, inertia)
     # the motor: fixed, or a Bonmin choice among candidates (binary weights)
     pct = drive.limits.peak_limit_pct / 100
@@ -620,12 +718,12 @@ def _add_drive(ctx: _Context, radius0: float | None) -> None:
         motor_name = "any catalogue motor"
     else:
         m = choice.motor
-        rotor = b.param("rotor inertia", m.rotor_inertia)
+        rotor = b.param("rotor inertia", lambda c: c.choice.motor.rotor_inertia)
         peak_num, rated_num, speed_num = peak_limit(m), m.rated_torque, m.rated_speed
-        peak_lim = b.param("peak limit", peak_num)
-        rated = b.param("rated torque", rated_num)
-        speed = b.param("rated speed", speed_num)
-        motor_name = m.name
+        peak_lim = b.param("peak limit", lambda c: peak_limit(c.choice.motor))
+        rated = b.param("rated torque", lambda c: c.choice.motor.rated_torque)
+        speed = b.param("rated speed", lambda c: c.choice.motor.rated_speed)
+        motor_name = m.name  # for messages: a relaxed build (which names them) is never reused
     tau_ref = drive.tau_ref  # a scale: the same for every motor, so one solver serves them all
     ctx.extra.update(radius=radius, r_ref=r_ref, tau_ref=tau_ref, trans=trans, rotor=rotor)
     peak_what = (f"peak_torque (peak torque, {motor_name}: {'%.3g' % peak_num} N m"
@@ -634,7 +732,7 @@ def _add_drive(ctx: _Context, radius0: float | None) -> None:
     torques, forces = [], []
     sum_sq = 0.0  # integral of (torque/tau_ref)^2 over the moves, divided by the period
     x_q, w_q = mesh.quadrature
-    period = b.param("period", ctx.problem.timing.period(ctx.extra["spm"]))
+    period = b.param("period", lambda c: c.extra["period"])
     greville = np.linspace(0.0, 1.0, mesh.degree + 1)
     for k, mv in enumerate(ctx.moves):
         # Torque (linear in the acceleration) is held at the Bernstein control points of the
@@ -684,7 +782,9 @@ def _add_drive(ctx: _Context, radius0: float | None) -> None:
         t_d = terms.total / tau_ref
         dwell_tau.append(t_d)
         forces.append(terms.load_force)
-        dwell_sq = dwell_sq + t_d**2 * b.param(f"dwell {itv.index} share", float(dur) / sch.period)
+        share = b.param(f"dwell {itv.index} share",
+                        lambda c, i=itv.index - 1: c.extra["schedule"].duration[i] / c.extra["schedule"].period)
+        dwell_sq = dwell_sq + t_d**2 * share
     if dwell_tau:
         tau_d = ca.vertcat(*dwell_tau)
         lim = _Limit("peak torque dwells", peak_what + " holding in the dwells", peak_num, "N m",
@@ -694,14 +794,14 @@ def _add_drive(ctx: _Context, radius0: float | None) -> None:
     lim = _Limit("RMS torque", f"rms_torque (RMS torque, {motor_name}: rated torque)", rated_num, "N m",
                  lambda sig, r=rated_num, tr=tau_ref: math.sqrt(r**2 + sig * tr**2), None, "rms_torque")
     b.limit(lim, mean_sq - (rated / tau_ref) ** 2)
-    ctx.extra.update(torques=torques, dwell_torques=dwell_tau, mean_sq=mean_sq, move_sq=sum_sq, period=sch.period)
-    ctx.extra["period"] = sch.period
+    ctx.extra.update(torques=torques, dwell_torques=dwell_tau, mean_sq=mean_sq, move_sq=sum_sq)
     # belt tension
     belt = drive.belt_limit(choice.teeth)
     if belt is not None:
         # the tension the belt checks allow; said in the units of the check that binds (drive.py's names)
         check, f_allow, belt_lim, belt_unit = belt
-        allf = ca.horzcat(*[ca.reshape(f, 1, -1) for f in forces]) / b.param("belt force limit", f_allow)
+        f_lim = b.param("belt force limit", lambda c: c.drive.belt_limit(c.choice.teeth)[1])
+        allf = ca.horzcat(*[ca.reshape(f, 1, -1) for f in forces]) / f_lim
         what = {"belt_width": "belt_width (width factor the belt tension requires)",
                 "belt_breaking": "belt_breaking (belt tension with safety factor, against the breaking load)"}[check]
         lim = _Limit("belt tension", what, belt_lim, belt_unit, lambda sig, bl=belt_lim: bl * (1 + sig), None, check)
@@ -711,7 +811,7 @@ def _add_drive(ctx: _Context, radius0: float | None) -> None:
         reflected = inertia + drive.load.moving_mass * radius**2
         lim = _Limit("inertia ratio", "inertia_ratio (load/rotor inertia ratio)", drive.limits.max_inertia_ratio,
                      "-", lambda sig, mr=drive.limits.max_inertia_ratio: mr * (1 + sig), None, "inertia_ratio",
-                     enforced=choice.teeth is None)
+                     enforced=lambda c: c.choice.teeth is None)
         b.limit(lim, reflected / (rotor * drive.limits.max_inertia_ratio) - 1.0)
     # handover accuracy: the error terms registered in HANDOVER_ERROR_TERMS (servo.py)
     terms = ([t for t in (term(ctx) for term in HANDOVER_ERROR_TERMS) if t is not None]
@@ -732,32 +832,55 @@ def _switch_positions(drive: _DriveSetup) -> list[float]:
     return [f.contact_position for f in drive.load.forces if f.kind == "spring"]
 
 
+def _pin_points(ctx: _Context) -> list[tuple[int, float, int | None]]:
+    """(move, switch position, mesh interval or None) of every load switch a move passes.
+
+    The interval holding the crossing (from ``ctx.extra["pin_times"]``) is part of the NLP's
+    structure: a pin's rows touch that interval's variables only.
+    """
+    out = []
+    for k, mv in enumerate(ctx.moves):
+        lo, hi = sorted((mv.start, mv.start + mv.stroke))
+        for pos in _switch_positions(ctx.drive):
+            if lo < pos < hi:
+                tau_c = ctx.extra["pin_times"].get((k, pos))
+                idx = None if tau_c is None else min(int(tau_c / ctx.mesh.h), ctx.mesh.intervals - 1)
+                out.append((k, pos, idx))
+    return out
+
+
+def _pin_basis(ctx: _Context, k: int, pos: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """Basis rows (acceleration, velocity increment) at this solve's crossing time, and its weight."""
+    mesh = ctx.mesh
+    tau_c = ctx.extra["pin_times"].get((k, pos))
+    if tau_c is None:
+        m = mesh.matrices([0.0])
+        return m["a"][0], m["v"][0], 0.0
+    idx = min(int(tau_c / mesh.h), mesh.intervals - 1)
+    m = mesh.matrices([tau_c / mesh.h - idx])
+    return m["a"][0], m["v"][0], 1.0
+
+
 def _pins(ctx: _Context, k: int, mv: _Move, rotor, trans):
     """Torque and belt force (row vectors) on both sides of every load switch the move passes.
 
-    The point is the mesh interval holding the crossing (part of the NLP's structure: its rows
-    touch that interval's variables only) and the local time inside it (parameters: the basis
-    rows at that time), so moving the point within its interval keeps the built solver.
-    ``ctx.extra["pin_times"]`` holds the unit times (None: not crossed, the point is switched
-    off by a zero weight).
+    The point is held in the mesh interval of the crossing (:func:`_pin_points`), the local
+    time inside it by parameters (the basis rows at that time), so moving the point within its
+    interval keeps the built solver. A switch the move does not cross (its time None) gets a
+    zero weight.
     """
     from .drive import load_torque
 
     b, mesh, x = ctx.built, ctx.mesh, ctx.vars[k]
-    lo, hi = sorted((mv.start, mv.start + mv.stroke))
+    d1 = mesh.degree + 1
     taus, forces = [], []
-    for pos in _switch_positions(ctx.drive):
-        if not lo < pos < hi:
+    for k_, pos, idx in ctx.extra["pins"]:
+        if k_ != k:
             continue
-        tau_c = ctx.extra.setdefault("pin_times", {}).get((k, pos))
-        idx, theta, weight = 0, 0.0, 0.0
-        if tau_c is not None:
-            idx = min(int(tau_c / mesh.h), mesh.intervals - 1)
-            theta, weight = tau_c / mesh.h - idx, 1.0
-        m = mesh.matrices([theta])
-        la = b.params(f"pin a{k}.{pos}", m["a"][0])  # 1 x (d+1) basis rows
-        lv = b.params(f"pin v{k}.{pos}", m["v"][0])
-        w = b.param(f"pin w{k}.{pos}", weight)
+        idx = 0 if idx is None else idx
+        la = b.params(f"pin a{k}.{pos}", lambda c, pos=pos: _pin_basis(c, k, pos)[0], (1, d1))
+        lv = b.params(f"pin v{k}.{pos}", lambda c, pos=pos: _pin_basis(c, k, pos)[1], (1, d1))
+        w = b.param(f"pin w{k}.{pos}", lambda c, pos=pos: _pin_basis(c, k, pos)[2])
         a_unit = ca.mtimes(la, x.A[idx, :].T)
         v_unit = x.V[idx] + mesh.h * ca.mtimes(lv, x.A[idx, :].T)
         v = v_unit * mv.stroke / ctx.T[k]
@@ -767,8 +890,6 @@ def _pins(ctx: _Context, k: int, mv: _Move, rotor, trans):
             terms = load_torque(rotor, trans, ctx.drive.load, ca.MX(pos + side), v, a)
             taus.append(w * terms.total)
             forces.append(w * terms.load_force)
-        ctx.extra.setdefault("pins", []).append((k, pos))
-        ctx.extra.setdefault("pin_intervals", []).append(idx if tau_c is not None else None)
     return (ca.horzcat(*taus) if taus else ca.MX(1, 0)), (ca.horzcat(*forces) if forces else ca.MX(1, 0))
 
 
@@ -786,7 +907,7 @@ def _initial_pin_times(ctx: _Context, drive: _DriveSetup, sols: list[MoveSolutio
 def _pin_times(ctx: _Context, sols: list[MoveSolution]) -> dict:
     """Unit times where each move of ``sols`` first passes each load switch (None: it does not)."""
     out = {}
-    for k, pos in ctx.extra.get("pins", []):
+    for k, pos, _ in ctx.extra.get("pins", []):
         mv, sol = ctx.moves[k], sols[k]
         cross = _crossings(sol, mv, [pos], fine_grid(sol.mesh, 4))
         out[(k, pos)] = float(cross[0]) if len(cross) else None
@@ -826,7 +947,7 @@ def _objective(ctx: _Context, objective: str):
         for mv, x, T in zip(moves, xs, ctx.T):
             a = (abs(mv.stroke) / T**2 / a_ref) * x.hull("a")  # bounds the acceleration everywhere, not only at the nodes
             b.constrain(f"peak accel epigraph move {mv.index}", ca.vertcat(ca.vec(z - a), ca.vec(z + a)), 0.0, np.inf)
-        ctx.extra.update(scale=a_ref, unit="m/s^2", transform=lambda f: f * a_ref)
+        ctx.extra.update(scale=a_ref, unit="m/s^2", transform=lambda f, c: f * a_ref)
         ctx.extra["objective_expr"] = z
         return z + _smoothing(ctx)
     if objective in ("min_accel_squared", "min_jerk", "min_snap"):
@@ -835,7 +956,7 @@ def _objective(ctx: _Context, objective: str):
         ref = max(mv.stroke**2 / mv.duration**power for mv in moves)
         total = sum((mv.stroke**2 / T**power / ref) * x.integral(kind) for mv, x, T in zip(moves, xs, ctx.T))
         unit = {"a": "m^2/s^3", "j": "m^2/s^5", "snap": "m^2/s^7"}[kind]
-        ctx.extra.update(scale=ref, unit=unit, transform=lambda f: f * ref)
+        ctx.extra.update(scale=ref, unit=unit, transform=lambda f, c: f * ref)
         return total
     if ctx.drive is None:
         raise ProblemError(str(ctx.problem.file), "design.objective",
@@ -859,15 +980,14 @@ def _objective(ctx: _Context, objective: str):
         if ctx.extra["dwell_torques"]:
             tau_d = ca.vertcat(*ctx.extra["dwell_torques"])
             b.constrain("peak torque epigraph dwells", ca.vertcat(Z[-1] - tau_d, Z[-1] + tau_d), 0.0, np.inf)
-        ctx.extra.update(unit="N m", transform=lambda f: f * tau_ref)
+        ctx.extra.update(unit="N m", transform=lambda f, c: f * tau_ref)
         ctx.extra["objective_expr"] = Z[0]
         return Z[0] + _smoothing(ctx)
     if objective == "min_rms_torque":
-        ctx.extra.update(unit="N m", transform=lambda f: math.sqrt(max(f, 0.0)) * tau_ref)
+        ctx.extra.update(unit="N m", transform=lambda f, c: math.sqrt(max(f, 0.0)) * tau_ref)
         return ctx.extra["mean_sq"]
     if objective == "min_energy":
-        period = ctx.extra["period"]
-        ctx.extra.update(unit="N^2 m^2 s", transform=lambda f: f * tau_ref**2 * period)
+        ctx.extra.update(unit="N^2 m^2 s", transform=lambda f, c: f * tau_ref**2 * c.extra["period"])
         return ctx.extra["move_sq"]
     raise ProblemError("--objective", "", f"{objective!r} is not one of {', '.join(OBJECTIVES)}")
 
@@ -882,30 +1002,25 @@ def _solver_options(settings: DesignSettings, extra: dict | None, verbose: bool)
     return opts
 
 
-_SOLVERS: dict = {}  # structure key -> (problem, solver); see _solve_nlp
-_SOLVER_CACHE_SIZE = 16
-
-
-def _structure_key(ctx: _Context, options: dict) -> tuple:
-    """What fixes the NLP's structure; solves that share it share one built solver (parameters differ)."""
+def _structure_key(ctx: _Context) -> tuple:
+    """What fixes the NLP's structure: solves that share it share one built NLP and solver (their numbers differ)."""
     choice = ctx.choice
-    return (id(ctx.problem), repr(ctx.settings), ctx.mesh, ctx.extra.get("objective"), ctx.built.relaxed,
-            repr(sorted(options.items())), tuple(mv.jerk_bound is None for mv in ctx.moves),
+    e = ctx.extra
+    return (id(ctx.problem), repr(ctx.settings), ctx.mesh, e["objective"], e["relaxed"], e["with_terms"],
+            e["enforce_accuracy"], tuple(mv.jerk_bound is None for mv in ctx.moves),
             None if choice is None else tuple(m.name for m in choice.candidates),
-            ctx.drive is not None and ctx.drive.belt is None, tuple(ctx.extra.get("pin_intervals", ())),
-            len(ctx.built.p), ctx.built.n_w, ctx.built.n_g)
+            ctx.drive is not None and ctx.drive.belt is None, tuple(e["pins"]), tuple(HANDOVER_ERROR_TERMS))
 
 
 def _solve_nlp(ctx: _Context, f, options: dict):
-    """Solve the NLP of ``ctx``; the solver (CasADi's costly derivative generation) is built once per structure."""
+    """Solve the NLP of ``ctx``; the solver (CasADi's costly derivative generation) is built once per
+    structure and options."""
     b = ctx.built
     opts = dict(options)
     plugin = opts.pop("plugin", "ipopt")
-    key = _structure_key(ctx, options)
-    cached = _SOLVERS.get(key)
-    if cached is not None and cached[0] is ctx.problem:
-        solver = cached[1]
-    else:
+    key = repr(sorted(options.items()))
+    solver = ctx.graph.solvers.get(key)
+    if solver is None:
         w, g, p = ca.vertcat(*b.w), ca.vertcat(*b.g), ca.vertcat(*b.p)
         if plugin == "bonmin":
             opts = {k: v for k, v in opts.items() if not k.startswith("ipopt.")}
@@ -918,11 +1033,9 @@ def _solve_nlp(ctx: _Context, f, options: dict):
                 discrete[offset:offset + count] = True
                 opts["discrete"] = discrete.tolist()
         solver = ca.nlpsol("design", plugin, {"x": w, "f": f, "g": g, "p": p}, opts)
-        if len(_SOLVERS) >= _SOLVER_CACHE_SIZE:
-            _SOLVERS.pop(next(iter(_SOLVERS)))
-        _SOLVERS[key] = (ctx.problem, solver)
-    args = dict(x0=np.concatenate(b.w0), lbx=np.concatenate(b.lbw), ubx=np.concatenate(b.ubw),
-                lbg=np.concatenate(b.lbg), ubg=np.concatenate(b.ubg), p=np.array(b.pvals))
+        ctx.graph.solvers[key] = solver
+    nums = ctx.numbers
+    args = dict(x0=nums.x0, lbx=nums.lbx, ubx=nums.ubx, lbg=nums.lbg, ubg=nums.ubg, p=nums.p)
     if plugin == "bonmin" and not options.get("ipopt.print_level", 0):
         with _quiet_stdout():  # Bonmin's branch-and-bound log ignores its log-level options
             sol = solver(**args)
@@ -969,7 +1082,7 @@ def _value(ctx: _Context, expr, x: np.ndarray) -> np.ndarray:
     """Numeric value of an expression of the NLP's variables and parameters at ``x``."""
     b = ctx.built
     fn = ca.Function("value", [ca.vertcat(*b.w), ca.vertcat(*b.p)], [expr])
-    return np.asarray(fn(x, np.array(b.pvals)))
+    return np.asarray(fn(x, ctx.numbers.p))
 
 
 def _unpack(ctx: _Context, x: np.ndarray) -> list[MoveSolution]:
@@ -1397,7 +1510,7 @@ def _solve_one(problem, spm, settings, mesh, objective, warm, drive, choice, opt
                                         settings.check_points)
             over = [max(0.0, -c.margin) for c in checks if c.name in _ENFORCED and math.isfinite(c.margin)]
             if objective == "min_peak_torque":  # the epigraph held at the nodes; the fine grid reads the peak
-                nlp_peak = ctx.extra["transform"](_objective_value(ctx, sol, x))
+                nlp_peak = ctx.extra["transform"](_objective_value(ctx, sol, x), ctx)
                 fine_peak = next(c.value for c in checks if c.name == "peak_torque")
                 fine["peak_torque_nodes_N_m"] = nlp_peak
                 fine["peak_torque_fine_N_m"] = fine_peak
@@ -1409,7 +1522,7 @@ def _solve_one(problem, spm, settings, mesh, objective, warm, drive, choice, opt
             break
         mesh = Mesh(mesh.intervals * 2, mesh.degree)
         warm = None
-    value = ctx.extra["transform"](_objective_value(ctx, sol, x))
+    value = ctx.extra["transform"](_objective_value(ctx, sol, x), ctx)
     return _Outcome(ctx, x, sols, value, "optimal" if status == "Solve_Succeeded" else "acceptable", total_time,
                     iterations, fine, radius, motor)
 
@@ -1644,7 +1757,7 @@ def _report_checks(best: _Outcome, design: "Design") -> tuple[list[dict], list[s
     active = []
     # active limit groups: the largest scaled residual of each group within 1e-4 of its bound
     for (lim, _), g in zip(ctx.built.limits, _limit_values(ctx, best.x)):
-        if lim.enforced and g > -1e-4:
+        if lim.is_enforced(ctx) and g > -1e-4:
             active.append(lim.name)
     for mv in ctx.moves:
         itv = ctx.problem.timing.intervals[mv.interval - 1]
@@ -1683,7 +1796,7 @@ def _diagnose(problem, spm, settings, mesh, objective, drive, choice, status, op
     x = np.asarray(sol["x"]).ravel()
     violated = []  # (relative excess, limit group, slack), worst first
     for lim, slack in ctx.built.limits:
-        sig = float(_value(ctx, slack, x).item()) if slack is not None and lim.enforced else 0.0
+        sig = float(_value(ctx, slack, x).item()) if slack is not None and lim.is_enforced(ctx) else 0.0
         if sig > 1e-6:
             need = lim.need(sig)
             violated.append((need / lim.limit - 1 if lim.limit else math.inf, lim, need))
@@ -1967,7 +2080,7 @@ def mesh_study(problem, *, objective: str | None = None, spm: float | None = Non
     rows = []
     it = progress(list(meshes)) if progress is not None else list(meshes)
     for n, d in it:
-        _SOLVERS.clear()  # every mesh is timed with its build
+        clear_cache()  # every mesh is timed with its build
         t0 = time.perf_counter()
         design = solve_design(problem, objective=objective, spm=spm, settings=settings, mesh=Mesh(n, d))
         elapsed = time.perf_counter() - t0
@@ -2006,7 +2119,7 @@ def _register_benchmarks() -> None:
         drive = _DriveSetup(p, s)
         choice = DriveChoice(drive.fixed_motor(), 28)
         opts = _solver_options(s, None, False)
-        _SOLVERS.clear()
+        clear_cache()
         t0 = time.perf_counter()
         first = _solve_one(p, 600.0, s, s.mesh, s.objective, None, drive, choice, opts, with_terms=False)
         cold = time.perf_counter() - t0
@@ -2025,7 +2138,7 @@ def _register_benchmarks() -> None:
         from .problem import load_problem
 
         p = load_problem(reference_problem_path())
-        _SOLVERS.clear()
+        clear_cache()
         t0 = time.perf_counter()
         d = solve_design(p)
         full = time.perf_counter() - t0
@@ -2054,7 +2167,7 @@ def _register_benchmarks() -> None:
             variants.append(("expand=True + jit (gcc -O1)", {"expand": True, "jit": True, "compiler": "shell",
                                                              "jit_options": {"flags": ["-O1"], "verbose": False}}))
         for label, opts in variants:
-            _SOLVERS.clear()
+            clear_cache()
             t0 = time.perf_counter()
             d = solve_design(p, solver_options=opts)
             build_solve = time.perf_counter() - t0
@@ -2073,7 +2186,7 @@ def _register_benchmarks() -> None:
         from .problem import load_problem
 
         def ours():
-            _SOLVERS.clear()
+            clear_cache()
             p = load_problem(_known_optimum_path("min_jerk.toml"))
             return solve_design(p).moves[0].C_a
 

@@ -1007,11 +1007,34 @@ def servo_handover_error(ctx):
     settings = getattr(problem, "servo", None)
     if settings is None or ctx.drive is None or not ctx.moves or "spm" not in ctx.extra:
         return None
+    if problem.timing.handover_move is None:
+        return None
+    x_q = (np.polynomial.legendre.leggauss(KERNEL_POINTS)[0] + 1) / 2
+    b = ctx.built
+    n = ctx.mesh.intervals
+    errors = 0
+    for k, mv in enumerate(ctx.moves):
+        w_sym = b.params(f"servo kernel move {mv.index}", lambda c, k=k: _servo_numbers(c)["weights"][k],
+                         (WINDOW_POINTS + 1, n * KERNEL_POINTS))
+        a = ca.vec(ctx.si(k, x_q, "a"))  # column-major: the same order as the kernel's sigma
+        errors = errors + ca.mtimes(w_sym, a)
+    load = b.param("servo load error", lambda c: _servo_numbers(c)["load"])
+    quant = b.param("servo encoder count", lambda c: _servo_numbers(c)["count"])
+    e = errors + load
+    return "servo loop and belt (servo.py)", ca.mmax(ca.sqrt(e**2 + 1e-14)) + quant
+
+
+def _servo_numbers(ctx) -> dict:
+    """The numbers of :func:`servo_handover_error` for one solve (speed, motor, pulley): kernel weights
+    per move, load error, encoder count. Computed once per solve (``ctx.extra["cache"]``)."""
+    cache = ctx.extra["cache"]
+    if "servo" in cache:
+        return cache["servo"]
+    problem = ctx.problem
+    settings = problem.servo
     spm = float(ctx.extra["spm"])
     timing = problem.timing
     move_h = timing.handover_move
-    if move_h is None:
-        return None
     choice = ctx.choice
     motor = choice.motor if choice is not None and choice.motor is not None else None
     teeth = choice.teeth if choice is not None and choice.teeth is not None else problem.pulley_teeth
@@ -1026,22 +1049,17 @@ def servo_handover_error(ctx):
                                 WINDOW_POINTS + 1)
     x_q, w_q = np.polynomial.legendre.leggauss(KERNEL_POINTS)
     x_q, w_q = (x_q + 1) / 2, w_q / 2
-    b = ctx.built
     n = ctx.mesh.intervals
-    errors = 0
-    for k, mv in enumerate(ctx.moves):
+    weights = []
+    for mv in ctx.moves:
         t0 = float(sch.t_start[mv.interval - 1])
         dur = float(sch.duration[mv.interval - 1])
         sigma = (t0 + (np.arange(n).reshape(-1, 1) + x_q.reshape(1, -1)) * dur / n).ravel(order="F")
         w = np.tile(w_q, (n, 1)).ravel(order="F") * dur / n
-        weights = kernel(t_check.reshape(-1, 1) + kernel.delay - sigma.reshape(1, -1)) * w.reshape(1, -1)
-        w_sym = b.params(f"servo kernel move {mv.index}", weights)
-        a = ca.vec(ctx.si(k, x_q, "a"))  # column-major: the same order as sigma
-        errors = errors + ca.mtimes(w_sym, a)
-    load = b.param("servo load error", _load_error(problem, settings, axis, gains, spm))
-    quant = b.param("servo encoder count", 2 * math.pi * axis.radius / settings.encoder_counts)
-    e = errors + load
-    return "servo loop and belt (servo.py)", ca.mmax(ca.sqrt(e**2 + 1e-14)) + quant
+        weights.append(kernel(t_check.reshape(-1, 1) + kernel.delay - sigma.reshape(1, -1)) * w.reshape(1, -1))
+    cache["servo"] = {"weights": weights, "load": _load_error(problem, settings, axis, gains, spm),
+                      "count": 2 * math.pi * axis.radius / settings.encoder_counts}
+    return cache["servo"]
 
 
 #: Instants after the end of the handover move checked in the design, spread over the handover
