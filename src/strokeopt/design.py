@@ -730,6 +730,7 @@ def _add_drive(ctx: _Context) -> None:
                  f"{', drive limit %g %% of rated' % drive.limits.peak_limit_pct if pct * (rated_num) < peak_num + 1e-12 and not choice.candidates else ''})")
     nodes = mesh.nodes
     torques, forces = [], []
+    pin_torques, pin_forces = [], []  # the pinned points, relative to their limits (see _pins_in_place)
     sum_sq = 0.0  # integral of (torque/tau_ref)^2 over the moves, divided by the period
     x_q, w_q = mesh.quadrature
     period = b.param("period", lambda c: c.extra["period"])
@@ -752,6 +753,8 @@ def _add_drive(ctx: _Context) -> None:
         pin_t, pin_f = _pins(ctx, k, mv, rotor, trans)
         tau = ca.horzcat(tau, pin_t / tau_ref)
         forces.append(pin_f)
+        pin_torques.append(ca.vec(pin_t) / peak_lim)
+        pin_forces.append(ca.vec(pin_f))
         torques.append(tau)
         lim = _Limit(f"peak torque move {mv.index}", peak_what, peak_num, "N m",
                      lambda sig, pl=peak_num, tr=tau_ref: pl + sig * tr, mv.index, "peak_torque")
@@ -802,10 +805,12 @@ def _add_drive(ctx: _Context) -> None:
         check, f_allow, belt_lim, belt_unit = belt
         f_lim = b.param("belt force limit", lambda c: c.drive.belt_limit(c.choice.teeth)[1])
         allf = ca.horzcat(*[ca.reshape(f, 1, -1) for f in forces]) / f_lim
+        pin_torques += [f / f_lim for f in pin_forces]
         what = {"belt_width": "belt_width (width factor the belt tension requires)",
                 "belt_breaking": "belt_breaking (belt tension with safety factor, against the breaking load)"}[check]
         lim = _Limit("belt tension", what, belt_lim, belt_unit, lambda sig, bl=belt_lim: bl * (1 + sig), None, check)
         b.limit_abs(lim, allf)
+    ctx.extra["pin_values"] = ca.vertcat(*pin_torques) if pin_torques else None
     # inertia ratio: a constraint only when the radius is free (a chosen pulley is checked, not held)
     if not choice.candidates:
         reflected = inertia + drive.load.moving_mass * radius**2
@@ -1457,15 +1462,26 @@ def _objective_value(ctx: _Context, sol, x) -> float:
     return float(sol["f"]) if expr is None else float(_value(ctx, expr, x).item())
 
 
-#: A pinned point (a load switch, see _pins) counts as in place when it moved less than this
-#: between two solves [unit time of the move; 1e-4 of a 10 ms move is 1 us]. A pin that far off
-#: reads the torque jump within about (jerk x time / acceleration) x 1e-4 of its size, some
-#: 1e-3 relative, below ``check_tolerance``; the fine grid reads the true peak after the solve.
-_PIN_TOLERANCE = 1e-4
+def _pins_in_place(ctx: _Context, x: np.ndarray, new: dict) -> bool:
+    """Whether the pinned points of ``ctx`` may stay where they are for the solution ``x``.
 
-
-def _same_time(a, b, tol: float = _PIN_TOLERANCE) -> bool:
-    return (a is None and b is None) or (a is not None and b is not None and abs(a - b) <= tol)
+    ``new`` holds the solution's own crossing times. Moving the pins there must keep them in
+    their mesh intervals and change the torque and belt force they hold by less than a tenth
+    of ``check_tolerance`` of the limits (the fine grid re-reads the true values after the
+    solve). A move that does not set a limit can shift its crossing freely without a re-solve.
+    """
+    old = ctx.extra["pin_times"]
+    if all((new.get(key) is None) == (old.get(key) is None) and (new.get(key) is None or new[key] == old[key])
+           for key in new):
+        return True
+    moved = replace(ctx, extra=dict(ctx.extra, pin_times=new, cache={}))
+    if _pin_points(moved) != ctx.extra["pins"] or ctx.extra.get("pin_values") is None:
+        return False
+    expr = ctx.extra["pin_values"]
+    before = _value(ctx, expr, x).ravel()
+    after = np.asarray(ca.Function("pins", [ca.vertcat(*ctx.built.w), ca.vertcat(*ctx.built.p)], [expr])(
+        x, ctx.built.numbers(moved).p)).ravel()
+    return bool(np.max(np.abs(after - before), initial=0.0) <= ctx.settings.check_tolerance / 10)
 
 
 def _solve_one(problem, spm, settings, mesh, objective, warm, drive, choice, options, radius0=None,
@@ -1489,11 +1505,10 @@ def _solve_one(problem, spm, settings, mesh, objective, warm, drive, choice, opt
             x = np.asarray(sol["x"]).ravel()
             sols = _unpack(ctx, x)
             new = _pin_times(ctx, sols)
-            old = ctx.extra["pin_times"]
             total = ctx.extra.get("handover_total", 0.0)
             violated = (not enforce and isinstance(total, (ca.MX, ca.SX))
                         and float(_value(ctx, total, x).item()) > settings.accuracy)
-            if all(_same_time(new.get(key), old.get(key)) for key in new) and not violated:
+            if not violated and _pins_in_place(ctx, x, new):
                 break
             pin_times, warm, enforce = new, sols, enforce or violated
         fine, _ = _fine_grid_report(ctx.moves, sols, settings.check_points)
