@@ -165,14 +165,15 @@ def test_accuracy_uses_the_drive_of_the_design(capsys, reference_path, tmp_path)
     assert main(["accuracy", str(reference_path), "--design", str(path), "--json", "--plot", "none"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["drive_from_design"]["pulley_teeth"] == 22
-    # the headline of the design is its own row, not the problem's law
-    assert data["design"]["law"].startswith("optimal") and data["design"]["handover_error_mm"] > 0
+    # the whole report is of the design's stroke, not of the problem's law
+    assert data["label"].startswith("optimal") and data["handover_error_mm"] > 0
     assert data["drive_from_design"]["motor"] == data["motor"] == z22.drive.motor
     assert data["pulley_pitch_diameter_mm"] == pytest.approx(22 * 3 / 3.141592653589793, rel=1e-3)  # GT3: 3 mm pitch
     # the optimal row is the design's stroke on the design's drive
     _, stroke = read_design(path)
     direct = handover_accuracy(z22, stroke, 600)
     assert data["laws"][-1]["handover_error_mm"] == pytest.approx(direct.handover_error * 1e3, rel=1e-6)
+    assert data["handover_error_mm"] == pytest.approx(direct.handover_error * 1e3, rel=1e-6)
     # the text says which drive it used and why solve's own check can be smaller
     assert main(["accuracy", str(reference_path), "--design", str(path), "--plot", "none"]) == 0
     out = capsys.readouterr().out

@@ -215,16 +215,17 @@ def cmd_accuracy(args) -> int:
     from .report import to_json
     from .servo import accuracy_report, accuracy_text
 
-    extra = []
+    stroke, label, extra = None, "", []
     if args.design:
         from .design import read_design
 
-        data, optimal = read_design(args.design)
+        data, stroke = read_design(args.design)
         if args.spm is not None and abs(_spm_value(args.spm) - float(data["spm"])) > 1e-9:
             raise ProblemError(args.design, "spm", f"the design was solved at {data['spm']:g} spm, not at {args.spm} "
                                                    "spm: omit --spm or solve the design at that rate")
         args.spm = str(data["spm"])
-        extra = [(f"optimal ({data.get('objective', 'design')})", optimal)]
+        label = f"optimal ({data.get('objective', 'design')})"
+        extra = [(label, stroke)]  # its row in the table of the classic laws
         drive_used = _design_drive(args, data)
     problem = _load(args)
     progress = None
@@ -233,20 +234,16 @@ def cmd_accuracy(args) -> int:
 
         def progress(items):
             return tqdm(items, desc="laws", unit="law", file=sys.stderr, leave=False)
-    report, result = accuracy_report(problem, problem.spm, compare_laws=args.compare_laws or bool(extra),
-                                     extra_strokes=extra, progress=progress)
-    head = ""
+    # with --design the whole report is of the design's stroke on its drive; the classic laws follow as a table
+    report, result = accuracy_report(problem, problem.spm, stroke=stroke, label=label,
+                                     compare_laws=args.compare_laws or bool(extra), extra_strokes=extra,
+                                     progress=progress)
     if args.design:
         report["drive_from_design"] = {"design": str(args.design), **drive_used}
-        row = next(r for r in report["laws"] if r["law"] == extra[0][0])
-        report["design"] = row  # the design's own prediction; the top-level numbers are the problem's law
-        head = (f"design {args.design}: handover error {row['handover_error_mm']:.4f} mm (largest over the handover "
-                f"window), residual belt vibration {row['residual_vibration_mm']:.4f} mm; the detailed prediction "
-                f"below is for the problem's own law, the design is the row '{row['law']}' of the table\n")
     if args.json:
         _emit(to_json(report))
     else:
-        print(head + accuracy_text(report))
+        print(accuracy_text(report))
     _write_figure(lambda p: result.plot(p), _plot_path(args, "accuracy"), args)
     return 0
 
@@ -630,8 +627,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--compare-laws", action="store_true",
                    help="also report handover error and residual vibration of every classic law")
     p.add_argument("--design", metavar="DESIGN_JSON",
-                   help="add the optimal stroke of a design.json (strokeopt solve --out) to the law comparison, "
-                        "at the rate it was solved for")
+                   help="predict for the optimal stroke of a design.json (strokeopt solve --out) on the motor and "
+                        "pulley it was solved with, at its rate; the classic laws follow as a table")
     _plot_option(p, "accuracy")
     p.set_defaults(run=cmd_accuracy)
 

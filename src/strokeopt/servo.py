@@ -838,16 +838,17 @@ TORQUE_BASIS = ("torque = the servo's torque command (rigid load + loop dynamics
                 "peak of the commanded stroke that 'strokeopt size' checks, so the two differ near the limit")
 
 
-def accuracy_report(problem, spm: float | None = None, *, compare_laws: bool = False, extra_strokes=(),
-                    progress=None) -> tuple[dict, AccuracyResult]:
-    """The report of ``strokeopt accuracy``: the prediction for the problem's stroke and, with
-    ``compare_laws``, the handover error and residual vibration of every classic law (plus
-    ``extra_strokes``: ``(label, StrokeFunction)`` pairs). ``progress`` wraps an iterable (tqdm)."""
+def accuracy_report(problem, spm: float | None = None, *, stroke=None, label: str = "", compare_laws: bool = False,
+                    extra_strokes=(), progress=None) -> tuple[dict, AccuracyResult]:
+    """The report of ``strokeopt accuracy``: the prediction for ``stroke`` (default: the problem's
+    own law; ``label`` names it) and, with ``compare_laws``, the handover error and residual
+    vibration of every classic law (plus ``extra_strokes``: ``(label, StrokeFunction)`` pairs).
+    ``progress`` wraps an iterable (tqdm)."""
     spm = problem.spm if spm is None else float(spm)
     settings = problem.servo or ServoSettings(file=str(problem.file))
     axis = axis_from_problem(problem, settings)
     gains = _tuned(axis, settings)
-    result = handover_accuracy(problem, spm=spm, settings=settings, axis=axis, gains=gains)
+    result = handover_accuracy(problem, stroke, spm=spm, settings=settings, axis=axis, gains=gains, label=label)
     design = getattr(problem, "design", None)
     requirement = design.accuracy if design is not None else 0.5e-3  # digest A.1: within 0.5 mm
     report = {"problem": problem.name, **result.summary(), "requirement_mm": requirement * 1e3,
