@@ -174,3 +174,18 @@ def test_infeasible_message_first_line_short_then_details(capsys):
     assert code == 1
     assert len(lines[0]) < 120 and "jerk bound needs 32 m/s^3, limit 20 m/s^3 (60.0 % over)" in lines[0]
     assert lines[1].startswith("  also (move ") and "jerk bound" in lines[1]
+
+
+def test_a_design_over_its_limits_between_nodes_is_not_optimal(capsys):
+    # the jerk bound is held on Bernstein coefficients up to IPOPT's precision (~1e-8 relative); with a
+    # check tolerance below that and no refinement the fine grid finds it over: status and exit code say so
+    code = main(["solve", str(KNOWN / "jerk_bounded_peak_accel.toml"), "--set", "design.check_tolerance=1e-12",
+                 "--set", "design.refinements=0", "--plot", "none", "--json"])
+    captured = capsys.readouterr()
+    data = json.loads(captured.out)
+    failed = [c for c in data["checks"] if not c["ok"]]
+    assert code == 1 and data["status"] == "limits exceeded" and failed
+    assert failed[0]["name"] in captured.err and "limits exceeded between collocation nodes" in captured.err
+    # the same design with the default tolerance is fine (the margin shows the exact value either way)
+    assert main(["solve", str(KNOWN / "jerk_bounded_peak_accel.toml"), "--plot", "none", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["status"] == "optimal"

@@ -38,6 +38,27 @@ def test_mesh_matrices_reproduce_polynomials():
     assert coef.min() <= vals.min() + 1e-12 and coef.max() >= vals.max() - 1e-12
 
 
+def test_velocity_hull_is_the_bernstein_form_of_the_velocity():
+    # the speed limit holds on these coefficients: they must be the velocity polynomial itself
+    from math import comb
+
+    import casadi as ca
+
+    from strokeopt.collocation import MoveVariables
+
+    mesh = Mesh(3, 3)
+    rng = np.random.default_rng(1)
+    S, V = ca.MX.sym("S", 4), ca.MX.sym("V", 4)
+    a0, Acol = ca.MX.sym("a0"), ca.MX.sym("A", 3, 3)
+    x = MoveVariables(mesh, S, V, a0, Acol)
+    theta = np.linspace(0, 1, 7)
+    f = ca.Function("f", [S, V, a0, Acol], [x.hull("v"), x.at(theta, "v")])
+    hull, exact = (np.asarray(r) for r in f(rng.normal(size=4), rng.normal(size=4), rng.normal(), rng.normal(size=(3, 3))))
+    n = hull.shape[1] - 1
+    basis = np.array([[comb(n, i) * t**i * (1 - t) ** (n - i) for i in range(n + 1)] for t in theta])
+    assert hull @ basis.T == pytest.approx(exact, rel=1e-12, abs=1e-12)
+
+
 def test_stroke_reproduces_collocation_polynomial_and_rests():
     design = solve_design(load_problem(KNOWN / "min_jerk.toml"))
     for move in design.moves:

@@ -111,3 +111,19 @@ def test_misspelt_required_key_is_named(write_problem):
     with pytest.raises(ProblemError, match=r"timing.start_position_mm: is required but missing "
                                            r"\(is 'start_positon_mm' a misspelling of it\?\)"):
         load_problem(path)
+
+
+@pytest.mark.parametrize("sets,field,words", [
+    # with interval_times = "published" the times set the schedule: an edited span must not be ignored
+    (["timing.intervals[2].span_deg=45", "timing.intervals[6].span_deg=62.3"], "timing.intervals[2].span_deg",
+     "published_time_s: 37.80 deg"),
+    # a move without a span is the span's error, not a later symptom (sampling, division by zero)
+    (["timing.intervals[5].span_deg=0", "timing.intervals[6].span_deg=84.9"], "timing.intervals[5].span_deg",
+     "needs a positive span"),
+])
+def test_spans_that_would_be_ignored_or_empty(capsys, reference_path, sets, field, words):
+    args = ["kinematics", str(reference_path), "--plot", "none"]
+    for s in sets:
+        args += ["--set", s]
+    line = _run_error(capsys, args)
+    assert field in line and words in line

@@ -482,6 +482,9 @@ def cmd_solve(args) -> int:
             print(f"written {path}", file=sys.stderr if args.json else sys.stdout)
     _write_figure(lambda p: plot_kinematics(problem, [design.stroke, problem.stroke(design.spm)], design.spm, p),
                   _plot_path(args, "solve"), args)
+    if design.status == "limits exceeded":
+        print(f"strokeopt: {design.notes[0]}", file=sys.stderr)
+        return 1
     return 0
 
 

@@ -162,13 +162,20 @@ class MoveVariables:
         raise ValueError(kind)
 
     def hull(self, kind: str) -> ca.MX:
-        """Bernstein coefficients of the acceleration (N x (d+1)) or jerk (N x d) polynomial of every interval.
+        """Bernstein coefficients of the velocity (N x (d+2)), acceleration (N x (d+1)) or jerk (N x d)
+        polynomial of every interval.
 
         Bounding these bounds the quantity everywhere (convex hull property).
         """
         coef = ca.mtimes(self.A, self.mesh.bernstein.T)
         if kind == "a":
             return coef
+        if kind == "v":  # v = V + h * integral of a: the integral's coefficients are the running sums / (d + 1)
+            d = self.mesh.degree
+            sums = [ca.MX.zeros(self.mesh.intervals, 1)]
+            for i in range(d + 1):
+                sums.append(sums[-1] + coef[:, i])
+            return ca.repmat(self.V[:-1], 1, d + 2) + self.mesh.h / (d + 1) * ca.horzcat(*sums)
         if kind == "j":
             d = self.mesh.degree
             return d * (coef[:, 1:] - coef[:, :-1]) / self.mesh.h

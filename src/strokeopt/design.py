@@ -736,7 +736,6 @@ def _add_drive(ctx: _Context) -> None:
     ctx.extra.update(radius=radius, r_ref=r_ref, tau_ref=tau_ref, trans=trans, rotor=rotor)
     peak_what = (f"peak_torque (peak torque, {motor_name}: {'%.3g' % peak_num} N m"
                  f"{', drive limit %g %% of rated' % drive.limits.peak_limit_pct if pct * (rated_num) < peak_num + 1e-12 and not choice.candidates else ''})")
-    nodes = mesh.nodes
     torques, forces = [], []
     pin_torques, pin_forces = [], []  # the pinned points, relative to their limits (see _pins_in_place)
     sum_sq = 0.0  # integral of (torque/tau_ref)^2 over the moves, divided by the period
@@ -749,7 +748,7 @@ def _add_drive(ctx: _Context) -> None:
         # the nodes: the acceleration part is then bounded everywhere in the interval (convex hull),
         # so the optimiser cannot hide a torque peak between two nodes.
         s = ca.vec(ctx.si(k, greville, "s")).T
-        v = ca.vec(ctx.si(k, nodes, "v")).T
+        v = ca.vec(ctx.vars[k].hull("v") * (mv.stroke / ctx.T[k])).T  # bounds the speed between nodes too
         a = ca.vec(ctx.vars[k].hull("a") * (mv.stroke / ctx.T[k] ** 2)).T
         terms = load_torque(rotor, trans, drive.load, s, 0 * s, a)
         tau = terms.total / tau_ref
@@ -1627,6 +1626,15 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     design.motor_spec = motor
     design.settings = settings
     design.checks, design.active_constraints = _report_checks(best, design)
+    failed = [c for c in design.checks if not c["ok"]]
+    if failed:  # beyond check_tolerance after every refinement: not a design to build
+        from .report import format_value
+
+        design.status = "limits exceeded"
+        design.notes.insert(0, "limits exceeded between collocation nodes: " + "; ".join(
+            f"{c['name']} {format_value(c['value'])} {c['unit']} > limit {format_value(c['limit'])} "
+            f"({-100 * c['margin']:.2f} % over)" for c in failed) + "; use more mesh intervals ([design] "
+            "mesh_intervals) or refinements")
     if drive is not None:
         # the objective as the fine grid reads it (the NLP saw the nodes)
         design.objective_value = _fine_objective(design, best) if objective in TORQUE_OBJECTIVES else best.value
@@ -1790,21 +1798,28 @@ def _check_static_accuracy(problem, settings, drive) -> None:
 
 
 def _report_checks(best: _Outcome, design: "Design") -> tuple[list[dict], list[str]]:
-    """Every check with its margin (fine grid), and the constraints active at the solution."""
+    """Every check with its margin (fine grid), and the constraints active at the solution.
+
+    One rule for every check: ok when the value exceeds the limit by less than
+    ``check_tolerance`` (the violation between collocation nodes the design accepts
+    before it refines the mesh; the margin shows the exact value).
+    """
     ctx = best.ctx
+    tol = ctx.settings.check_tolerance
     checks = []
     for mv, row in zip(ctx.moves, best.fine["moves"]):
         if mv.jerk_bound is not None:
-            value = row["jerk_max_fine_m_s3"]
-            checks.append({"name": f"jerk move {mv.index}", "value": value, "limit": mv.jerk_bound, "unit": "m/s^3",
-                           "margin": 1.0 - value / mv.jerk_bound,
-                           "ok": bool(value <= mv.jerk_bound * (1 + ctx.settings.check_tolerance))})
-    checks += list(best.fine.get("drive_checks", []))
+            checks.append({"name": f"jerk move {mv.index}", "value": row["jerk_max_fine_m_s3"], "limit": mv.jerk_bound,
+                           "unit": "m/s^3"})
+    checks += [dict(c) for c in best.fine.get("drive_checks", [])]
     for name, value in ctx.extra.get("handover_terms", []):
         v = float(value) if isinstance(value, (int, float)) else float(_value(ctx, value, best.x).item())
-        acc = ctx.settings.accuracy
-        checks.append({"name": f"handover accuracy ({_term_name(name)})", "value": v * 1e3, "limit": acc * 1e3, "unit": "mm",
-                       "margin": 1.0 - v / acc, "ok": bool(v <= acc)})
+        checks.append({"name": f"handover accuracy ({_term_name(name)})", "value": v * 1e3,
+                       "limit": ctx.settings.accuracy * 1e3, "unit": "mm"})
+    for c in checks:
+        value, limit = float(c["value"]), float(c["limit"])
+        c["margin"] = 1.0 - value / limit if limit > 0 else (-math.inf if value > 0 else 0.0)
+        c["ok"] = bool(value <= limit * (1 + tol))
     active = []
     # active limit groups: the largest scaled residual of each group within 1e-4 of its bound
     for (lim, _), g in zip(ctx.built.limits, _limit_values(ctx, best.x)):
@@ -2004,6 +2019,11 @@ def feasible_text(row: dict) -> str:
     return "yes" if row.get("feasible", True) else "no: " + ", ".join(row.get("violates") or ["?"])
 
 
+def _pulley_text(design: "Design") -> str:
+    return (f"{design.pulley_teeth} teeth" if design.pulley_teeth is not None
+            else "continuous radius (design.pulley = \"continuous\": no catalogue tooth count)")
+
+
 def design_text(design: "Design", comparison: list[dict] | None = None) -> str:
     """A readable account of a design: choices, objective, moves, checks with margins, active constraints."""
     from .report import format_table, format_value
@@ -2012,7 +2032,7 @@ def design_text(design: "Design", comparison: list[dict] | None = None) -> str:
              f"{design.solve_time_s:.2f} s, mesh {design.mesh.intervals} x degree {design.mesh.degree})",
              f"objective {design.objective}: {format_value(design.objective_value)} {design.objective_unit}"]
     if design.motor is not None:
-        lines.append(f"motor {design.motor}; pulley {design.pulley_teeth} teeth, pitch diameter "
+        lines.append(f"motor {design.motor}; pulley {_pulley_text(design)}, pitch diameter "
                      f"{design.pitch_diameter * 1e3:.2f} mm")
     lines.append("")
     lines.append(format_table([m.to_dict() for m in design.moves],
@@ -2024,7 +2044,9 @@ def design_text(design: "Design", comparison: list[dict] | None = None) -> str:
         lines.append("")
         lines.append(format_table(design.checks, [("name", "check"), ("value", "value"), ("limit", "limit"),
                                                   ("unit", "unit"), ("margin", "margin"), ("ok", "ok")],
-                                  title="checks (fine grid between collocation nodes; margin = 1 - value/limit)"))
+                                  title=f"checks (fine grid between collocation nodes; margin = 1 - value/limit; ok: "
+                                        f"within the limit + check_tolerance "
+                                        f"{100 * (design.settings or DesignSettings()).check_tolerance:g} %)"))
     lines.append("")
     lines.append("active constraints: " + ("; ".join(design.active_constraints) or "none"))
     if comparison:
@@ -2034,7 +2056,7 @@ def design_text(design: "Design", comparison: list[dict] | None = None) -> str:
         cols.append(("vs_optimal_pct", f"{design.objective} vs optimal %"))
         cols.append(("feasible_text", "feasible"))
         lines.append("")
-        motor = f" with {design.motor}, {design.pulley_teeth} teeth" if design.motor else ""
+        motor = f" with {design.motor}, {_pulley_text(design)}" if design.motor else ""
         shown = [{**r, "feasible_text": feasible_text(r)} for r in comparison]
         lines.append(format_table(shown, cols, title=f"comparison with the classic laws{motor}"))
         if any(not r.get("feasible", True) for r in comparison):
@@ -2099,6 +2121,10 @@ def sweep_design(problem, spms, *, objective: str | None = None, settings: Desig
                          "solve_time_s": time.perf_counter() - t0})
             continue
         warm = d
+        if d.status == "limits exceeded":
+            rows.append({"spm": float(spm), "feasible": False, "reason": d.notes[0],
+                         "solve_time_s": time.perf_counter() - t0})
+            continue
         s = design_summary(d)
         rows.append({"spm": float(spm), "feasible": True, "objective_value": d.objective_value,
                      "motor": d.motor, "pulley_teeth": d.pulley_teeth, "peak_torque_N_m": s["peak_torque_N_m"],

@@ -320,6 +320,11 @@ def _read_law(f: Fields, key: str, default: MotionLaw | None = None) -> MotionLa
     return make_law(name, where=(f.file, f.where(key)), **params)
 
 
+#: How far the span a published time implies may differ from the file's span_deg [deg]: the
+#: thesis's own times and spans differ by up to 0.9 deg (reference problem, move 3 and dwell 6).
+PUBLISHED_SPAN_TOLERANCE_DEG = 1.0
+
+
 def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagram:
     times = f.string("interval_times", "nominal", choices=INTERVAL_TIMES)
     position = f.number("start_position_mm") * 1e-3
@@ -335,6 +340,8 @@ def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagra
         published = row.number("published_time_s", None, min=0.0) if times == "nominal" else row.number("published_time_s", positive=True)
         handover = row.boolean("handover", False)
         if stroke > 0:
+            if span <= 0:
+                raise row.error("span_deg", f"a move ({stroke * 1e3:g} mm) needs a positive span, got {span:g} deg")
             direction = row.string("direction", choices=("up", "down"))
             law = _read_law(row, "law", default_law)
             n_moves += 1
@@ -354,6 +361,15 @@ def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagra
     total = sum(i.span_deg for i in intervals)
     if abs(total - 360.0) > 1e-6:
         raise f.error("intervals", f"spans add to {total:g} deg, not 360 deg: an interval is missing or a span is wrong")
+    if times == "published":
+        # the times set the schedule; the spans must still say the same (an edited span would be ignored)
+        t_total = sum(i.published_time_s for i in intervals)
+        for i, row in zip(intervals, rows):
+            implied = 360.0 * i.published_time_s / t_total
+            if abs(implied - i.span_deg) > PUBLISHED_SPAN_TOLERANCE_DEG:
+                raise row.error("span_deg", f"{i.span_deg:g} deg, but interval_times = \"published\" takes the span "
+                                            f"from published_time_s: {implied:.2f} deg; change both, or set "
+                                            f"timing.interval_times = \"nominal\" to use the spans")
     start = intervals[0].start_position
     if abs(position - start) > 1e-9:
         raise f.error("intervals", f"the strokes do not close the cycle: the last interval ends at {position * 1e3:g} mm, "
