@@ -152,3 +152,14 @@ def test_integrator_failure_is_one_line_of_strokeopt(capfd, reference_path):
     out, err = capfd.readouterr()
     assert out == "" and "At t =" not in err
     assert err.count("\n") == 1 and err.startswith("strokeopt: failed: cvodes failed") and "error test" in err
+
+
+def test_speed_sweep_names_the_onset_of_premature_release(capsys, reference_path):
+    # at these rates the release scene closes gap N before the impact (min gap N < 0): the summary says from where
+    assert main(["simulate", str(reference_path), "--scene", "release", "--spm", "1100:1160:20", "--json",
+                 "--plot", "none"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    first = next(r["spm"] for r in data["rows"] if r["premature_release"])
+    assert data["premature_release_onset_spm"] == first
+    assert main(["simulate", str(reference_path), "--scene", "release", "--spm", "1100:1160:20", "--plot", "none"]) == 0
+    assert f"premature release from {first:g} spm" in capsys.readouterr().out

@@ -189,3 +189,19 @@ def test_a_design_over_its_limits_between_nodes_is_not_optimal(capsys):
     # the same design with the default tolerance is fine (the margin shows the exact value either way)
     assert main(["solve", str(KNOWN / "jerk_bounded_peak_accel.toml"), "--plot", "none", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["status"] == "optimal"
+
+
+def test_a_feasible_law_below_the_optimum_is_explained(capsys):
+    # inertia matching at rest_order 1: the parabolic law is the exact optimum, the mesh's optimum is 0.1 % above it
+    assert main(["solve", str(KNOWN / "inertia_matching.toml"), "--plot", "none"]) == 0
+    out = capsys.readouterr().out
+    assert "parabolic is" in out and "below the optimal stroke and feasible" in out and "--study mesh" in out
+    assert "None teeth" not in out and "continuous radius" in out
+
+
+def test_an_incomplete_design_file_names_the_missing_field(capsys, tmp_path):
+    bad = tmp_path / "design.json"
+    bad.write_text(json.dumps({"format": "strokeopt-design", "mesh": {"intervals": 4, "degree": 3}}))
+    assert main(["verify", str(bad), "--plot", "none"]) == 2
+    err = capsys.readouterr().err
+    assert str(bad) in err and "moves" in err and "missing" in err and "Traceback" not in err

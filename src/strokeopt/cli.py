@@ -369,8 +369,10 @@ def cmd_simulate(args) -> int:
     if isinstance(args.spm, list):
         rows = sweep_spm(problem, scene, args.spm, options, progress=not args.json)
         onset = lag_onset_spm(rows)
+        premature = lag_onset_spm(rows, "premature_release")
         if args.json:
-            _emit(to_json({"scene": scene, "lag_onset_spm": onset, "rows": rows}))
+            _emit(to_json({"scene": scene, "lag_onset_spm": onset, "premature_release_onset_spm": premature,
+                           "rows": rows}))
         else:
             print(format_table(rows, SWEEP_COLUMNS, title=f"{problem.name}: scene {scene!r}, speed sweep "
                                                           f"(interval times {problem.timing.interval_times})"))
@@ -379,6 +381,9 @@ def cmd_simulate(args) -> int:
             else:
                 print(f"\nthe follower lags from {onset:g} spm" + (" (the first speed of the sweep: start lower to "
                                                                    "find the onset)" if onset == rows[0]["spm"] else ""))
+            if premature is not None:
+                print(f"premature release from {premature:g} spm: gap N closes before the impact (columns "
+                      f"'premature', 'min gap N mm')")
         _write_figure(lambda p: plot_sweep(rows, p), _plot_path(args, f"sweep_{scene}"), args)
         return 0
     result = simulate_scene(problem, scene, problem.spm, options=options)
@@ -512,7 +517,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("laws", help="table of the classic motion laws and their characteristic values",
                        description="The classic motion laws on a unit rise and their characteristic values "
-                                   "C_v, C_a, C_j (computed from the laws, not typed in).")
+                                   "C_v, C_a, C_j (computed from the laws, not typed in).",
+                       epilog="Example: strokeopt laws --json")
     p.add_argument("--json", action="store_true", help="print only JSON on stdout")
     p.set_defaults(run=cmd_laws)
 

@@ -1357,8 +1357,11 @@ def read_design(path: str | Path) -> tuple[dict, StrokeFunction]:
             else:
                 pieces.append(dwell_piece(t0, dur, pos, itv["name"]))
         stroke = StrokeFunction(float(data["cycle_time_s"]), pieces, label="optimal")
-    except (KeyError, TypeError, ValueError) as exc:
-        raise ProblemError(str(path), "", f"design file is incomplete or malformed: {exc!r}") from None
+    except KeyError as exc:
+        raise ProblemError(str(path), str(exc.args[0]), "is missing: the design file is incomplete (write it "
+                                                        "again with strokeopt solve --out)") from None
+    except (TypeError, ValueError) as exc:
+        raise ProblemError(str(path), "", f"design file is malformed: {exc}") from None
     return data, stroke
 
 
@@ -1983,8 +1986,8 @@ def compare_with_laws(design: "Design", laws=None) -> list[dict]:
     for r in rows:
         base = opt.get(measure) if measure else None
         val = r.get(measure) if measure else None
-        r["vs_optimal_pct"] = (100.0 * (val / base - 1.0) if base and val is not None and math.isfinite(val)
-                               else None)
+        pct = 100.0 * (val / base - 1.0) if base and val is not None and math.isfinite(val) else None
+        r["vs_optimal_pct"] = 0.0 if pct is not None and abs(pct) < 1e-6 else pct  # equal up to round-off: 0
     # a law that breaks the problem's constraints does not compete with the optimum: listed last
     return [opt] + [r for r in rows[1:] if r["feasible"]] + [r for r in rows[1:] if not r["feasible"]]
 
@@ -2062,6 +2065,12 @@ def design_text(design: "Design", comparison: list[dict] | None = None) -> str:
         if any(not r.get("feasible", True) for r in comparison):
             lines.append("laws marked 'no' break the problem's constraints (listed last): a lower value there "
                          "does not beat the optimum")
+        beaten = [r for r in comparison[1:] if r.get("feasible", True) and (r.get("vs_optimal_pct") or 0.0) < 0]
+        if beaten:
+            lines.append(f"{beaten[0]['law']} is {-beaten[0]['vs_optimal_pct']:.3g} % below the optimal stroke and "
+                         f"feasible: the collocation mesh resolves the optimum only to about that accuracy (this "
+                         f"law may itself be the exact optimum); `strokeopt solve --study mesh` shows the error "
+                         f"against the mesh size")
         if comparison[0].get("peak_torque_N_m") is not None and design.checks and any(
                 c["name"].startswith("handover accuracy") for c in design.checks):
             lines.append("feasible: rest order, jerk bound and drive checks; the laws' handover accuracy is not "

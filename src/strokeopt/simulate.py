@@ -591,9 +591,10 @@ def sweep_spm(problem, scene: str, spms, options: SimulationOptions | None = Non
     return [simulate_scene(problem, scene, s, options=options).summary() for s in it]
 
 
-def lag_onset_spm(rows: list[dict]) -> float | None:
-    """The first speed of a sweep at which the follower lags (None if it never does)."""
-    return next((r["spm"] for r in rows if r["lag"]), None)
+def lag_onset_spm(rows: list[dict], key: str = "lag") -> float | None:
+    """The first speed of a sweep at which the follower lags (or ``key``, e.g. ``premature_release``,
+    is true; None if it never is)."""
+    return next((r["spm"] for r in rows if r.get(key)), None)
 
 
 REFERENCE_OPTIONS = SimulationOptions(rtol=1e-9, atol=1e-10)
