@@ -472,7 +472,8 @@ def cmd_solve(args) -> int:
                   if at_end else f"\nfastest feasible stitch rate: {best:g} spm")
         _write_figure(lambda p: plot_design_sweep(rows, p), _plot_path(args, "solve_sweep"), args)
         return 0
-    design = solve_design(problem, objective=args.objective, verbose=args.verbose)
+    design = solve_design(problem, objective=args.objective, verbose=args.verbose,
+                          progress=progress and (lambda it: progress(it, "motors")))
     comparison = compare_with_laws(design)
     if args.json:
         _emit(to_json({**design_summary(design), "comparison": comparison}))

@@ -1582,12 +1582,13 @@ def _solve_one(problem, spm, settings, mesh, objective, warm, drive, choice, opt
 
 def solve_design(problem, *, objective: str | None = None, spm: float | None = None,
                  settings: DesignSettings | None = None, mesh: Mesh | None = None, warm_start=None,
-                 solver_options: dict | None = None, verbose: bool = False) -> Design:
+                 solver_options: dict | None = None, verbose: bool = False, progress=None) -> Design:
     """Solve the design problem of ``problem`` at ``spm`` (default: the file's).
 
     ``objective`` overrides ``[design] objective``; ``mesh`` overrides its mesh;
     ``warm_start`` is a previous :class:`Design` (or its move solutions) to start from;
-    ``solver_options`` are passed to ``casadi.nlpsol`` over the defaults.
+    ``solver_options`` are passed to ``casadi.nlpsol`` over the defaults; ``progress`` wraps the
+    motors of a catalogue search (tqdm).
     Raises :class:`SolverError` naming the constraint that cannot be met.
     """
     settings = settings or getattr(problem, "design", None) or DesignSettings()
@@ -1613,7 +1614,8 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
         best = _solve_one(problem, spm, settings, mesh, objective, warm, None, None, options)
         teeth, pd, motor = None, None, None
     else:
-        best, teeth, notes = _choose_parts(problem, spm, settings, mesh, objective, warm, drive, options, radius0)
+        best, teeth, notes = _choose_parts(problem, spm, settings, mesh, objective, warm, drive, options, radius0,
+                                           progress)
         # the handover accuracy terms at the chosen design (lazy: re-solved with them only if violated)
         choice = DriveChoice(best.motor, teeth, None if teeth else drive.radius_bounds())
         best = _with_terms(problem, spm, settings, objective, drive, choice, options, best)
@@ -1682,7 +1684,7 @@ def _fine_objective(design: "Design", best: _Outcome) -> float:
     return best.value
 
 
-def _choose_parts(problem, spm, settings, mesh, objective, warm, drive: _DriveSetup, options, radius0):
+def _choose_parts(problem, spm, settings, mesh, objective, warm, drive: _DriveSetup, options, radius0, progress=None):
     """Motor (fixed, enumerated, or Bonmin) and pulley (fixed, or continuous radius then nearest tooth counts).
 
     Enumeration prunes: the continuous-radius optimum of a motor is a lower bound of its
@@ -1710,7 +1712,7 @@ def _choose_parts(problem, spm, settings, mesh, objective, warm, drive: _DriveSe
     failures = []
     # phase 1: every motor with its own best pulley radius (continuous), or the fixed pulley
     first_pass = []
-    for motor in motors:
+    for motor in (progress(motors) if progress is not None and len(motors) > 1 else motors):
         try:
             if settings.pulley == "fixed":
                 out = _solve_one(problem, spm, settings, mesh, objective, warm, drive,
