@@ -8,7 +8,7 @@ at one stitch rate as one NLP and solves it with IPOPT (through CasADi):
   rest to rest at the dwell boundaries, the handover position met exactly
   (the move ends at its dwell position, which is a bound, not a penalty);
 * the NLP is stated in scaled units (unit stroke, unit time per move, torques
-  relative to a reference torque, the radius relative to the file's pulley),
+  relative to a reference torque, the radius relative to the catalogue range's geometric mean),
   so the answer does not depend on the units the user wrote;
 * objectives (``[design] objective`` or ``--objective``): see :data:`OBJECTIVES`;
 * path constraints are imposed at the collocation nodes and checked on a fine
