@@ -7,7 +7,9 @@ import json
 import numpy as np
 import pytest
 
-from strokeopt import bench
+from strokeopt.bench import registry as bench
+from strokeopt.bench.sizing import size_pairs_loop
+from strokeopt.bench.run import run_benchmarks  # noqa: F401  (registers every benchmark)
 from strokeopt.cli import main
 
 
@@ -18,7 +20,7 @@ def test_registry_and_duplicate_names():
 
 
 def test_loop_reference_agrees_with_the_vectorised_sizing(reference):
-    from strokeopt.drive import _candidates
+    from strokeopt.drive.sizing import _candidates
 
     spec = reference.drive
     cat = spec.catalogue()
@@ -26,7 +28,7 @@ def test_loop_reference_agrees_with_the_vectorised_sizing(reference):
     stroke = reference.stroke(600)
     kin = stroke.sample(301)
     belt = spec.belt_spec(cat)
-    loop = bench.size_pairs_loop(kin, motors, pulleys, spec.load, spec.limits, belt, 600, stroke.period)
+    loop = size_pairs_loop(kin, motors, pulleys, spec.load, spec.limits, belt, 600, stroke.period)
     vec = _candidates(kin, motors, pulleys, spec.load, spec.limits, belt, 600, stroke.period)
     assert len(loop) == len(vec) == 4
     for checks, cand in zip(loop, vec):

@@ -97,7 +97,7 @@ def test_bad_problem_file_exit_2(capsys, write_problem, edit, words):
 @pytest.mark.slow  # solves a design first (collocation, seconds to tens of seconds)
 def test_verify_design(capsys, reference_path, tmp_path, monkeypatch):
     from strokeopt import load_problem
-    from strokeopt.design import solve_design
+    from strokeopt.design.solve import solve_design
 
     design = solve_design(load_problem(reference_path), objective="min_jerk", spm=600)
     path = design.write(tmp_path)[0]

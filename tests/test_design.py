@@ -9,10 +9,9 @@ import numpy as np
 import pytest
 
 from strokeopt import ProblemError, SolverError, load_problem
-from strokeopt.collocation import Mesh, MoveSolution
-from strokeopt.design import (DesignSettings, _term_name, compare_with_laws, fastest_feasible, read_design,
-                              solve_design, sweep_design)
-from strokeopt.drive import drive_checks
+from strokeopt.design.collocation import Mesh, MoveSolution
+from strokeopt.design.solve import DesignSettings, _term_name, compare_with_laws, fastest_feasible, read_design, solve_design, sweep_design
+from strokeopt.drive.sizing import drive_checks
 
 ROOT = Path(__file__).resolve().parents[1]
 KNOWN = ROOT / "problems" / "known_optima"
@@ -44,7 +43,7 @@ def test_velocity_hull_is_the_bernstein_form_of_the_velocity():
 
     import casadi as ca
 
-    from strokeopt.collocation import MoveVariables
+    from strokeopt.design.collocation import MoveVariables
 
     mesh = Mesh(3, 3)
     rng = np.random.default_rng(1)

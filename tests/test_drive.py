@@ -9,9 +9,8 @@ import numpy as np
 import pytest
 
 from strokeopt import Check, DriveLimits, Load, LoadForce, ProblemError, SliderCrank, load_problem, load_torque
-from strokeopt.actuators import load_catalogue
-from strokeopt.drive import (BeltSpec, belt_load, binding_check, drive_checks, max_spm, optimal_radius,
-                             scale_kinematics, size_drive)
+from strokeopt.drive.catalogue import load_catalogue
+from strokeopt.drive.sizing import BeltSpec, belt_load, binding_check, drive_checks, max_spm, optimal_radius, scale_kinematics, size_drive
 
 
 @pytest.fixture(scope="module")
@@ -205,7 +204,7 @@ def test_max_spm_is_the_edge_of_feasibility(reference, cat):
 def test_max_spm_none_when_the_static_load_is_too_much(cat):
     # a constant force alone (200 N on a 13.4 mm radius: 2.7 N m) exceeds the rated torque: no rate is feasible
     problem_load = Load(0.01, -9.81, (LoadForce("press", "constant", -1.0, 200.0),))
-    from strokeopt.stroke import Kinematics
+    from strokeopt.motion.stroke import Kinematics
 
     t = np.linspace(0, 0.2, 11)
     z = np.zeros_like(t)

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from strokeopt import load_problem
-from strokeopt.design import solve_design
+from strokeopt.design.solve import solve_design
 
 KNOWN = Path(__file__).resolve().parents[1] / "problems" / "known_optima"
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from strokeopt import ProblemError, load_problem, make_scene
-from strokeopt.simulate import _drive_reference
+from strokeopt.contact.simulate import _drive_reference
 
 
 def _ode(problem, scene, smoothing=0.0):

@@ -9,10 +9,8 @@ import numpy as np
 import pytest
 
 from strokeopt import ProblemError, SolverError
-from strokeopt.servo import (
-    DriveAxis, ServoSettings, axis_from_problem, belt_stiffness, build_loop, handover_accuracy, loop_margins,
-    residual_vibration_table, simulate_loop, tune,
-)
+from strokeopt.servo.kernel import error_kernel
+from strokeopt.servo.loop import DriveAxis, ServoSettings, axis_from_problem, belt_stiffness, build_loop, handover_accuracy, loop_margins, residual_vibration_table, simulate_loop, tune
 
 
 @pytest.fixture(scope="module")
@@ -190,7 +188,7 @@ def test_error_kernel_reproduces_the_simulation(setup):
 
     problem, settings, axis, gains = setup
     stroke = problem.stroke(600)
-    kernel = servo.error_kernel(axis, settings, gains, stroke.period)
+    kernel = error_kernel(axis, settings, gains, stroke.period)
     sch = problem.timing.schedule(600)
     t_h = sch.t_start[1] + sch.duration[1]
     continuous = replace(settings, control_cycle=10e-6)
@@ -199,8 +197,8 @@ def test_error_kernel_reproduces_the_simulation(setup):
 
 
 def test_servo_term_is_registered_in_the_design():
-    from strokeopt import design
-    from strokeopt.servo import servo_handover_error
+    from strokeopt.design import solve as design
+    from strokeopt.servo.kernel import servo_handover_error
 
     assert servo_handover_error in design.HANDOVER_ERROR_TERMS
     assert design.HANDOVER_ERROR_TERMS.count(servo_handover_error) == 1
@@ -212,7 +210,7 @@ def test_design_with_the_accuracy_constraint_resimulates_within_it(setup):
     # full loop model (table sampling, load forces, worst table phase), meets 0.5 mm; and a tight
     # 0.05 mm constraint (active in the design) holds in the re-simulation to within the effects
     # the design's term leaves out
-    from strokeopt.design import DesignSettings, solve_design
+    from strokeopt.design.solve import DesignSettings, solve_design
 
     problem, settings, axis, gains = setup
     base = replace(problem.design or DesignSettings(), motor_choice="fixed", pulley="fixed")
@@ -234,7 +232,7 @@ def test_design_with_the_accuracy_constraint_resimulates_within_it(setup):
 
 
 def test_tradeoff_classic_is_monotone_and_names_its_limit(reference):
-    from strokeopt.servo import tradeoff_classic
+    from strokeopt.servo.tradeoff import tradeoff_classic
 
     pts = tradeoff_classic(reference, [0.03e-3, 0.06e-3, 0.1e-3, 1.0e-3], resolution=40, step=150)
     assert [p.accuracy for p in pts] == sorted(p.accuracy for p in pts)
@@ -251,7 +249,7 @@ def test_tradeoff_classic_is_monotone_and_names_its_limit(reference):
 
 @pytest.mark.slow
 def test_tradeoff_optimal_names_its_limit_and_resimulates(reference):
-    from strokeopt.servo import tradeoff_optimal
+    from strokeopt.servo.tradeoff import tradeoff_optimal
 
     (pt,) = tradeoff_optimal(reference, [0.5e-3], resolution=100, start=800)
     assert pt.stroke == "optimal" and pt.max_spm is not None and pt.max_spm >= 500
@@ -263,7 +261,7 @@ def test_tradeoff_optimal_names_its_limit_and_resimulates(reference):
 def test_tradeoff_figure_plain_ticks_words_and_labels_inside():
     import matplotlib.pyplot as plt
 
-    from strokeopt.servo import plot_tradeoff
+    from strokeopt.servo.tradeoff import plot_tradeoff
 
     pts = [{"accuracy_mm": a, "stroke": kind, "max_spm": spm + extra, "binding": b}
            for kind, extra in (("modified_sine", 0), ("optimal", 40))

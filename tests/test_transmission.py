@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from strokeopt import BeltPulley, ScrewLever, SliderCrank, gt3_pitch_diameter
-from strokeopt.transmission import Transmission
+from strokeopt.drive.transmission import Transmission
 
 PHI = np.linspace(0.1, 2.9, 15)
 

@@ -27,23 +27,23 @@ The data flow::
 exported here.
 """
 
-from .actuators import Belt, Catalogue, Pulley, ServoMotor, load_catalogue
-from .drive import (Check, DriveLimits, DriveSpec, Load, LoadForce, drive_checks, load_torque, optimal_radius,
-                    size_drive)
-from .collocation import Mesh
-from .design import (OBJECTIVES, Design, DesignSettings, compare_with_laws, design_text, mesh_study, read_design,
-                     solve_design, sweep_design)
+from .drive.catalogue import Belt, Catalogue, Pulley, ServoMotor, load_catalogue
+from .drive.sizing import Check, DriveLimits, DriveSpec, Load, LoadForce, drive_checks, load_torque, optimal_radius, size_drive
+from .design.collocation import Mesh
+from .design.solve import OBJECTIVES, Design, DesignSettings, compare_with_laws, design_text, mesh_study, read_design, solve_design, sweep_design
 from .errors import ProblemError, SolverError, StrokeoptError
-from .laws import LAW_NAMES, Characteristics, MotionLaw, law_table, make_law
-from .model import Body, Element, ForceLaw, Model
-from .problem import Problem, load_problem
-from .scene import Scene, make_scene
-from .servo import (AccuracyResult, DriveAxis, ServoSettings, accuracy_report, axis_from_problem, handover_accuracy,
-                    tradeoff)
-from .simulate import SceneResult, SimulationOptions, simulate_scene, sweep_spm, tolerance_study
-from .stroke import Kinematics, Piece, StrokeFunction
-from .timing import Interval, TimingDiagram
-from .transmission import BeltPulley, ScrewLever, SliderCrank, Transmission, gt3_pitch_diameter
+from .motion.laws import LAW_NAMES, Characteristics, MotionLaw, law_table, make_law
+from .contact.model import Body, Element, ForceLaw, Model
+from .problem import Problem
+from .io.problem_file import load_problem
+from .contact.scene import Scene, make_scene
+from .servo.kernel import servo_handover_error  # noqa: F401  (registers the design term on import)
+from .servo.loop import AccuracyResult, DriveAxis, ServoSettings, accuracy_report, axis_from_problem, handover_accuracy
+from .servo.tradeoff import tradeoff
+from .contact.simulate import SceneResult, SimulationOptions, simulate_scene, sweep_spm, tolerance_study
+from .motion.stroke import Kinematics, Piece, StrokeFunction
+from .motion.timing import Interval, TimingDiagram
+from .drive.transmission import BeltPulley, ScrewLever, SliderCrank, Transmission, gt3_pitch_diameter
 
 __all__ = [
     "Body", "Element", "ForceLaw", "Model", "Scene", "SceneResult", "SimulationOptions", "make_scene",

@@ -53,8 +53,8 @@ def _spm_value(text: str) -> float:
 
 
 def _load(args):
-    from .laws import make_law
-    from .problem import load_problem
+    from .motion.laws import make_law
+    from .io.problem_file import load_problem
 
     overrides = list(args.overrides)
     if getattr(args, "spm", None) is not None and not isinstance(args.spm, list):
@@ -94,8 +94,8 @@ def _write_figure(figure_fn, path: Path | None, args) -> None:
 
 
 def cmd_laws(args) -> int:
-    from .laws import law_table
-    from .report import format_table, to_json
+    from .motion.laws import law_table
+    from .report.format import format_table, to_json
 
     rows = law_table()
     if args.json:
@@ -111,8 +111,8 @@ def cmd_laws(args) -> int:
 
 
 def cmd_kinematics(args) -> int:
-    from .plots import plot_kinematics
-    from .report import kinematics_summary, kinematics_text, to_json
+    from .report.plots import plot_kinematics
+    from .report.format import kinematics_summary, kinematics_text, to_json
 
     problem = _load(args)
     stroke = problem.stroke()
@@ -126,8 +126,8 @@ def cmd_kinematics(args) -> int:
 
 
 def cmd_size(args) -> int:
-    from .drive import optimal_radius, size_drive
-    from .report import format_table, to_json
+    from .drive.sizing import optimal_radius, size_drive
+    from .report.format import format_table, to_json
 
     problem = _load(args)
     if problem.drive is None:
@@ -200,8 +200,9 @@ def cmd_size(args) -> int:
 
 
 def cmd_bench(args) -> int:
-    from .bench import format_results, run_benchmarks
-    from .report import to_json
+    from .bench.registry import format_results
+    from .bench.run import run_benchmarks
+    from .report.format import to_json
 
     results = run_benchmarks(args.only)
     if args.json:
@@ -212,12 +213,12 @@ def cmd_bench(args) -> int:
 
 
 def cmd_accuracy(args) -> int:
-    from .report import to_json
-    from .servo import accuracy_report, accuracy_text
+    from .report.format import to_json
+    from .servo.loop import accuracy_report, accuracy_text
 
     stroke, label, extra = None, "", []
     if args.design:
-        from .design import read_design
+        from .design.solve import read_design
 
         data, stroke = read_design(args.design)
         if args.spm is not None and abs(_spm_value(args.spm) - float(data["spm"])) > 1e-9:
@@ -251,7 +252,7 @@ def cmd_accuracy(args) -> int:
 def _design_drive(args, data: dict) -> dict:
     """Make ``args.overrides`` use the motor and pulley a design.json was solved with (the design's
     stroke is only right on its own drive); a --set forcing another motor or pulley is an error."""
-    from .problem import parse_override
+    from .io.fields import parse_override
 
     design = {"motor": data.get("motor"), "pulley_teeth": data.get("pulley_teeth")}
     keys = {"motor": ("drive", "motor"), "pulley_teeth": ("transmission", "pulley_teeth")}
@@ -272,8 +273,8 @@ def _design_drive(args, data: dict) -> dict:
 
 
 def cmd_tradeoff(args) -> int:
-    from .report import to_json
-    from .servo import plot_tradeoff, tradeoff, tradeoff_text
+    from .report.format import to_json
+    from .servo.tradeoff import plot_tradeoff, tradeoff, tradeoff_text
 
     problem = _load(args)
     accuracies = None
@@ -302,7 +303,7 @@ def cmd_tradeoff(args) -> int:
 
 
 def _sim_options(args):
-    from .simulate import SimulationOptions
+    from .contact.simulate import SimulationOptions
 
     # hard contact switches only: smoothing them is a numerical study device (SimulationOptions.smoothing,
     # --study tolerance shows its bias), not a model option; at ordinary widths it changes the answer
@@ -321,8 +322,8 @@ def _scene_name(args, problem) -> str:
 
 
 def _report_scene(args, problem, scene, result, extra=None, kind: str = "simulate") -> None:
-    from .report import to_json
-    from .simulate import scene_text
+    from .report.format import to_json
+    from .contact.simulate import scene_text
 
     summary = {**(extra or {}), **result.summary()}
     if args.verbose:
@@ -336,10 +337,9 @@ def _report_scene(args, problem, scene, result, extra=None, kind: str = "simulat
 
 
 def cmd_simulate(args) -> int:
-    from .report import format_table, to_json
-    from .plots import plot_sweep, plot_tolerance_study
-    from .simulate import (STUDY_COLUMNS, SWEEP_COLUMNS, lag_onset_spm, parse_spm_range, simulate_scene, sweep_spm,
-                           tolerance_study)
+    from .report.format import format_table, to_json
+    from .report.plots import plot_sweep, plot_tolerance_study
+    from .contact.simulate import STUDY_COLUMNS, SWEEP_COLUMNS, lag_onset_spm, parse_spm_range, simulate_scene, sweep_spm, tolerance_study
 
     spms = parse_spm_range(args.spm) if args.spm is not None else None
     if spms is not None:
@@ -392,10 +392,10 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_verify(args) -> int:
-    from .design import read_design
+    from .design.solve import read_design
     from .errors import ProblemError
-    from .problem import load_problem
-    from .simulate import simulate_scene
+    from .io.problem_file import load_problem
+    from .contact.simulate import simulate_scene
 
     data, stroke = read_design(args.design)
     problem_file = args.problem or data.get("problem_file")
@@ -414,10 +414,9 @@ def cmd_verify(args) -> int:
 
 
 def cmd_solve(args) -> int:
-    from .design import (OBJECTIVES, check_out_dir, compare_with_laws, design_summary, design_text, fastest_feasible,
-                         mesh_study, solve_design, sweep_design)
-    from .plots import plot_design_sweep, plot_kinematics, plot_mesh_study
-    from .report import format_table, to_json
+    from .design.solve import OBJECTIVES, check_out_dir, compare_with_laws, design_summary, design_text, fastest_feasible, mesh_study, solve_design, sweep_design
+    from .report.plots import plot_design_sweep, plot_kinematics, plot_mesh_study
+    from .report.format import format_table, to_json
 
     sweep = None
     if args.spm is not None and ":" in args.spm:

@@ -21,8 +21,8 @@ from functools import cache
 import casadi as ca
 import numpy as np
 
-from ._casadi import evaluate
-from .errors import ProblemError
+from .._casadi import evaluate
+from ..errors import ProblemError
 
 #: Derivative orders by name, as reported by :attr:`MotionLaw.continuity`.
 DERIVATIVE_NAMES = ("position", "velocity", "acceleration", "jerk", "snap")

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from .stroke import StrokeFunction
+from ..motion.stroke import StrokeFunction
 
 
 def _clean(obj: Any, where: str = "") -> Any:

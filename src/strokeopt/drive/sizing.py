@@ -42,7 +42,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from .errors import ProblemError
+from ..errors import ProblemError
 
 G = 9.81  # m/s^2, as the thesis uses (appendix 2)
 CHECK_NAMES = ("peak_torque", "overload", "rms_torque", "peak_speed", "inertia_ratio", "belt_width", "belt_breaking")
@@ -322,7 +322,7 @@ class DriveSpec:
 
     def catalogue(self, extra_files=()):
         """The shipped catalogue plus this problem's and ``extra_files``' catalogue files."""
-        from .actuators import load_catalogue
+        from .catalogue import load_catalogue
 
         return load_catalogue(list(self.catalogue_files) + list(extra_files))
 
@@ -341,7 +341,7 @@ class DriveSpec:
 
 def parse_drive(f, base_dir: Path | None = None) -> DriveSpec:
     """Read the ``[drive]`` table (a :class:`~strokeopt.problem.Fields`) of a problem file."""
-    from .actuators import BELT_CORDS, PROFILE_PITCH
+    from .catalogue import BELT_CORDS, PROFILE_PITCH
 
     motor = f.string("motor", None)
     mass = f.number("moving_mass_kg", positive=True)
@@ -469,7 +469,7 @@ class Sizing:
     def plot(self, path=None, candidate: Candidate | None = None):
         """The classic sizing picture for ``candidate`` (default: the best ranked); see
         :func:`strokeopt.plots.plot_sizing`."""
-        from .plots import plot_sizing
+        from ..report.plots import plot_sizing
 
         return plot_sizing(self, candidate, path)
 
@@ -479,7 +479,7 @@ def scale_kinematics(kin, factor: float):
 
     Exact for a timing diagram, whose interval times all scale with the cycle time.
     """
-    from .stroke import Kinematics
+    from ..motion.stroke import Kinematics
 
     return Kinematics(kin.t / factor, kin.s, kin.v * factor, kin.a * factor**2, kin.j * factor**3)
 
@@ -642,7 +642,7 @@ def optimal_radius(motor, load: Load, kin, pulley_inertia=None, bounds=(2e-3, 0.
     or None for none. With inertia only and no pulley inertia the optimum is
     ``r = sqrt(J_rotor / m)`` (inertia matching).
     """
-    from .errors import SolverError
+    from ..errors import SolverError
     from .transmission import BeltPulley
 
     base = load_torque(0.0, BeltPulley(2.0), load, kin.s, kin.v, kin.a)  # r = 1: eps = a, mu = 1

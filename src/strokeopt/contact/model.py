@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # the Fields reader lives in problem.py, which imports this module
-    from .problem import Fields
+    from ..io.fields import Fields
 
 FRAME = "frame"
 ELEMENT_KINDS = ("spring", "contact", "grip")

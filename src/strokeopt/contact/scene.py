@@ -31,8 +31,8 @@ import casadi as ca
 from .model import FRAME, Element, Model
 
 if TYPE_CHECKING:
-    from .problem import Fields
-    from .stroke import StrokeFunction
+    from ..io.fields import Fields
+    from ..motion.stroke import StrokeFunction
 
 
 @dataclass(frozen=True)
@@ -70,7 +70,7 @@ class Scene:
 
 def make_scene(model: Model, name: str, bodies, elements, description: str = "", where=None) -> Scene:
     """A scene from names, checked against the model. ``where = (file, field)`` for error messages."""
-    from .errors import ProblemError
+    from ..errors import ProblemError
 
     file, fld = where or ("scene", name)
     bodies = tuple(bodies)

@@ -14,7 +14,7 @@ import math
 import casadi as ca
 import numpy as np
 
-from ._casadi import evaluate
+from .._casadi import evaluate
 
 
 class Transmission:

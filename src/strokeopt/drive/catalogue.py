@@ -1,7 +1,7 @@
 """Actuators and drive components: servo motors, toothed pulleys, belts, and their catalogues.
 
 Catalogues are TOML files. strokeopt ships three (package data in
-``strokeopt/catalogue/``): ``motors.toml`` (thesis Tab. 4.5-4.6),
+``strokeopt/drive/data/``): ``motors.toml`` (thesis Tab. 4.5-4.6),
 ``gt3_pulleys.toml`` (GT3 pulleys, 14-52 grooves) and ``gt3_belts.toml``
 (GT3 belts and the belt-check method of thesis appendix 2). A user adds
 parts with files of the same form (``load_catalogue(extra_files=[...])`` or
@@ -31,8 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import ProblemError
-from .problem import Fields, _did_you_mean
+from ..errors import ProblemError
+from ..io.fields import Fields, _did_you_mean
 from .transmission import BeltPulley
 
 RPM = 2 * math.pi / 60  # rad/s per rpm
@@ -211,7 +211,7 @@ class Catalogue:
 
 
 def builtin_catalogue_files() -> list[Path]:
-    base = resources.files("strokeopt") / "catalogue"
+    base = resources.files("strokeopt") / "drive" / "data"
     return [Path(str(base / name)) for name in BUILTIN_FILES]
 
 

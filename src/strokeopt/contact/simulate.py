@@ -82,7 +82,7 @@ from dataclasses import dataclass, field, replace
 import casadi as ca
 import numpy as np
 
-from .errors import ProblemError, SolverError
+from ..errors import ProblemError, SolverError
 
 LAG_THRESHOLD = 1e-6  # m: x_driven - x_follower above this is a lag (contacts deflect ~1e-8 m)
 GAP_CLOSED = 1e-6  # m: a remaining gap N below this is closed
@@ -168,7 +168,7 @@ class SceneResult:
 
     def plot(self, path=None):
         """The figure of :func:`strokeopt.plots.plot_scene`; written to ``path`` when given."""
-        from .plots import plot_scene
+        from ..report.plots import plot_scene
 
         return plot_scene(self, path)
 
@@ -700,44 +700,3 @@ SWEEP_COLUMNS = [("spm", "spm"), ("impact_velocity_m_s", "impact m/s"), ("impact
 STUDY_COLUMNS = [("method", "method"), ("switching", "switching"), ("smoothing_mm", "smoothing mm"), ("rtol", "rtol"),
                  ("impact_velocity_error_m_s", "impact v error m/s"), ("release_angle_error_deg", "release error deg"),
                  ("impact_angle_error_deg", "impact angle error deg"), ("nsteps", "steps"), ("cpu_time_s", "CPU s")]
-
-
-# --------------------------------------------------------------------------- benchmark (strokeopt bench)
-
-from .bench import BenchResult, BenchRow, benchmark, reference_problem_path  # noqa: E402
-
-BENCH_ACCURACY_M_S = 1e-3  # impact velocity accuracy both integrators must reach
-
-
-@benchmark("simulate_release", "one cycle of the needle-bar release scene at 600 spm (CasADi CVODES vs scipy Radau, "
-                               "impact velocity to 1e-3 m/s)", target_s=0.5)
-def _bench_simulate_release() -> BenchResult:
-    from .problem import load_problem
-
-    problem = load_problem(reference_problem_path())
-    spm = 600.0
-    ref = simulate_scene(problem, "release", spm, options=SimulationOptions(rtol=1e-8, atol=1e-9))
-    v_ref = ref.metrics["impact_velocity_m_s"]
-    runs = [simulate_scene(problem, "release", spm) for _ in range(3)]
-    fast = min(r.cpu_time_s for r in runs)
-    err_fast = abs(runs[0].metrics["impact_velocity_m_s"] - v_ref)
-    rows = [BenchRow("CasADi CVODES, rtol 1e-5 (default), CPU", fast, f"impact velocity error {err_fast:.1e} m/s")]
-    notes = [f"reference: CVODES rtol 1e-8, impact velocity {v_ref:.5f} m/s ({ref.cpu_time_s:.2f} s CPU)"]
-    slow, err_slow = None, None
-    for rtol in (1e-3, 1e-4, 1e-5):  # the loosest scipy tolerance that reaches the same accuracy
-        peer = simulate_scene_scipy(problem, "release", spm, rtol=rtol, atol=rtol / 10)
-        err = abs(peer.metrics["impact_velocity_m_s"] - v_ref) if peer.metrics["impact_velocity_m_s"] is not None else math.inf
-        rows.append(BenchRow(f"scipy solve_ivp Radau, rtol {rtol:g}, CPU", peer.cpu_time_s,
-                             f"impact velocity error {err:.1e} m/s" + ("" if err <= BENCH_ACCURACY_M_S else " (not accurate enough)")))
-        if err <= BENCH_ACCURACY_M_S:
-            slow, err_slow = peer.cpu_time_s, err
-            break
-    if slow is None:
-        notes.append("scipy Radau did not reach 1e-3 m/s down to rtol 1e-5; ratio against its last run")
-        slow = rows[-1].seconds
-    notes.append("same scene ODE, stroke restarts, scaling, output grid and event location for both; scipy calls the "
-                 "CasADi right-hand side and Jacobian from Python; target: CasADi >= 20x faster")
-    if err_fast > BENCH_ACCURACY_M_S:
-        notes.append(f"CasADi default missed the accuracy: {err_fast:.1e} m/s")
-    return BenchResult(rows=rows, measured_s=fast, ratio=slow / fast, ratio_label="scipy Radau / CasADi CVODES (CPU)",
-                       notes=notes)

@@ -161,7 +161,7 @@ def plot_sweep(rows: list[dict], path=None):
     axes[1].plot(spm, [np.nan if r["min_gap_N_mm"] is None else r["min_gap_N_mm"] for r in rows], "o-", ms=3,
                  color="tab:purple")
     axes[1].set_ylabel("min remaining gap N [mm]")
-    from .simulate import lag_onset_spm
+    from ..contact.simulate import lag_onset_spm
 
     onset = lag_onset_spm(rows)
     for ax in axes:

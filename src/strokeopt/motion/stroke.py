@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from ._casadi import evaluate
+from .._casadi import evaluate
 
 
 @dataclass(frozen=True)

@@ -63,10 +63,10 @@ import casadi as ca
 import numpy as np
 
 from .collocation import Mesh, MoveSolution, MoveVariables, fine_grid, node_times
-from .errors import ProblemError, SolverError
-from .laws import make_law
-from .stroke import Piece, StrokeFunction, dwell_piece
-from .transmission import BeltPulley, Transmission
+from ..errors import ProblemError, SolverError
+from ..motion.laws import make_law
+from ..motion.stroke import Piece, StrokeFunction, dwell_piece
+from ..drive.transmission import BeltPulley, Transmission
 
 #: Objectives that need only the kinematics.
 KINEMATIC_OBJECTIVES = ("min_peak_accel", "min_accel_squared", "min_jerk", "min_snap")
@@ -463,7 +463,7 @@ class _DriveSetup:
     def pulley(self, teeth: int):
         found = self.catalogue.pulleys_of(self.profile, teeth, teeth)
         if not found:
-            from .actuators import Pulley, pitch_diameter
+            from ..drive.catalogue import Pulley, pitch_diameter
 
             pd = pitch_diameter(self.profile, teeth)
             return Pulley(f"{self.profile}-{teeth}", self.profile, teeth, pd,
@@ -485,7 +485,7 @@ class _DriveSetup:
         return self.catalogue.motor(self.spec.motor, (self.file, "drive.motor"))
 
     def radius_bounds(self) -> tuple[float, float]:
-        from .actuators import pitch_diameter
+        from ..drive.catalogue import pitch_diameter
 
         return pitch_diameter(self.profile, self.teeth_range[0]) / 2, pitch_diameter(self.profile, self.teeth_range[1]) / 2
 
@@ -502,7 +502,7 @@ class _DriveSetup:
         """The belt check that binds first: (drive.py's check name, allowable tension [N], the check's limit, unit)."""
         if self.belt is None:
             return None
-        from .drive import belt_load
+        from ..drive.sizing import belt_load
 
         grooves = teeth if teeth is not None else self.teeth_range[0]  # conservative for a continuous radius
         unit = belt_load(1.0, grooves, self.belt)  # everything is linear in the tension
@@ -516,7 +516,7 @@ class _DriveSetup:
 
     def handover_force(self) -> float:
         """|Effective belt tension| [N] at rest at the handover position (gravity and load forces)."""
-        from .drive import load_torque
+        from ..drive.sizing import load_torque
 
         move = self.problem.timing.handover_move
         s = np.array([move.end_position if move is not None else 0.0])
@@ -686,7 +686,7 @@ def _pulley_setting(ctx: _Context) -> tuple[float, float, float, float]:
 
 def _add_drive(ctx: _Context) -> None:
     """Motor torque, speed, belt tension and inertia limits at every node (drive.py's load model)."""
-    from .drive import load_torque
+    from ..drive.sizing import load_torque
 
     b, drive, choice, mesh = ctx.built, ctx.drive, ctx.choice, ctx.mesh
     # The pulley radius is a decision variable scaled by a reference radius: free between the
@@ -901,7 +901,7 @@ def _pins(ctx: _Context, k: int, mv: _Move, rotor, trans):
     window and the local time are parameters, so the crossing may move across the window
     between solves without a new build. A switch the move does not cross gets a zero weight.
     """
-    from .drive import load_torque
+    from ..drive.sizing import load_torque
 
     b, mesh, x = ctx.built, ctx.mesh, ctx.vars[k]
     d1 = mesh.degree + 1
@@ -1289,7 +1289,7 @@ class Design:
 
     def write(self, out_dir: str | Path, resolution_deg: float = 0.1) -> list[Path]:
         """Write ``design.json`` and ``cam_table.csv`` into ``out_dir``; returns the paths."""
-        from .report import to_json
+        from ..report.format import to_json
 
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
@@ -1475,7 +1475,7 @@ def _fine_cycle(problem, spm: float, moves: list[_Move], sols: list[MoveSolution
 def _drive_checks_fine(drive: _DriveSetup, motor, teeth: int | None, radius: float, problem, spm, moves, sols,
                        per_interval: int) -> list:
     """drive.py's checks of the solution, on a fine grid over the whole cycle."""
-    from .drive import drive_checks
+    from ..drive.sizing import drive_checks
 
     switches = [f.contact_position for f in drive.load.forces if f.kind == "spring"]
     t, s, v, a = _fine_cycle(problem, spm, moves, sols, per_interval, switches)
@@ -1633,7 +1633,7 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     design.checks, design.active_constraints = _report_checks(best, design)
     failed = [c for c in design.checks if not c["ok"]]
     if failed:  # beyond check_tolerance after every refinement: not a design to build
-        from .report import format_value
+        from ..report.format import format_value
 
         design.status = "limits exceeded"
         design.notes.insert(0, "limits exceeded between collocation nodes: " + "; ".join(
@@ -1762,7 +1762,7 @@ def _choose_parts(problem, spm, settings, mesh, objective, warm, drive: _DriveSe
 
 def _nearest_teeth(problem, spm, settings, mesh, objective, drive, motor, options, cont: _Outcome):
     """Re-solve with the tooth counts either side of the continuous optimum; keep the better."""
-    from .actuators import PROFILE_PITCH
+    from ..drive.catalogue import PROFILE_PITCH
 
     z = 2 * math.pi * cont.radius / PROFILE_PITCH[drive.profile]
     available = [p.teeth for p in drive.catalogue.pulleys_of(drive.profile, *drive.teeth_range)]
@@ -1926,7 +1926,7 @@ def _stroke_measures(design: "Design", stroke: StrokeFunction, samples: int = 20
         int_j2 += math.inf if math.isinf(pk.j_max) else float(np.sum(k.j**2) * dur / len(t))
     row = {"a_max_m_s2": a_max, "jerk_max_m_s3": j_max, "accel_squared": int_a2, "jerk_squared": int_j2}
     if design.motor_spec is not None and problem.drive is not None:
-        from .drive import drive_checks, load_torque
+        from ..drive.sizing import drive_checks, load_torque
 
         drive = _DriveSetup(problem, getattr(problem, "design", None) or DesignSettings())
         trans = drive.transmission(design.pulley_teeth) if design.pulley_teeth else \
@@ -1964,7 +1964,7 @@ def compare_with_laws(design: "Design", laws=None) -> list[dict]:
     handover accuracy is not checked) and which it breaks. The optimum comes first, then the
     feasible laws, then the infeasible ones: a law that breaks a constraint does not beat the optimum.
     """
-    from .laws import LAW_NAMES
+    from ..motion.laws import LAW_NAMES
 
     problem = design.problem
     if laws is None:
@@ -2007,7 +2007,7 @@ def _law_violations(problem, spm: float, settings: DesignSettings, law) -> list[
     c_j = c.C_j
     if settings.rest_order < 2 and math.isinf(c_j):
         # the design itself may jump in acceleration at the dwells (rest_order 1): only the jerk inside counts
-        from .laws import _peak
+        from ..motion.laws import _peak
 
         inner = law.derivatives([x + d for x in law.breaks for d in (-1e-9, 1e-9)] or [0.5], 2)[2]
         jumps = np.abs(inner[0::2] - inner[1::2]) if law.breaks else np.zeros(1)
@@ -2031,7 +2031,7 @@ def _pulley_text(design: "Design") -> str:
 
 def design_text(design: "Design", comparison: list[dict] | None = None) -> str:
     """A readable account of a design: choices, objective, moves, checks with margins, active constraints."""
-    from .report import format_table, format_value
+    from ..report.format import format_table, format_value
 
     lines = [f"{design.problem.name}: optimal stroke at {design.spm:g} spm ({design.status}, "
              f"{design.solve_time_s:.2f} s, mesh {design.mesh.intervals} x degree {design.mesh.degree})",
@@ -2186,147 +2186,3 @@ def mesh_study(problem, *, objective: str | None = None, spm: float | None = Non
         r["objective_error_pct"] = 100.0 * abs(r["objective_value"] / ref - 1.0) if ref else None
     rows[-1]["reference"] = True
     return rows
-
-
-# --------------------------------------------------------------------------- benchmarks (strokeopt bench)
-
-
-def _known_optimum_path(name: str) -> Path:
-    from .bench import reference_problem_path
-
-    return reference_problem_path().parent / "known_optima" / name
-
-
-def _register_benchmarks() -> None:
-    from .bench import BenchResult, BenchRow, benchmark, best_time, reference_problem_path
-
-    @benchmark("design_resolve", "reference design, thesis drive fixed (055U2B30, 28 teeth), 600 spm: re-solve "
-                                 "with the built solver (the step of a sweep)", target_s=0.5)
-    def _bench_design_resolve() -> BenchResult:
-        from .problem import load_problem
-
-        p = load_problem(reference_problem_path(), ['design.motor_choice="fixed"', 'design.pulley="fixed"',
-                                                    "machine.spm=600"])
-        s = replace(p.design, refinements=0)
-        drive = _DriveSetup(p, s)
-        choice = DriveChoice(drive.fixed_motor(), 28)
-        opts = _solver_options(s, None, False)
-        clear_cache()
-        t0 = time.perf_counter()
-        first = _solve_one(p, 600.0, s, s.mesh, s.objective, None, drive, choice, opts, with_terms=False)
-        cold = time.perf_counter() - t0
-        warm = best_time(lambda: _solve_one(p, 600.0, s, s.mesh, s.objective, first.sols, drive, choice, opts,
-                                            with_terms=False), repeat=3)
-        return BenchResult(rows=[BenchRow("first solve (builds the NLP and its derivatives)", cold,
-                                          f"3 moves, {s.mesh.intervals} intervals x degree {s.mesh.degree}"),
-                                 BenchRow("re-solve, built solver, warm start", warm)],
-                           measured_s=warm, ratio=cold / warm, ratio_label="first / re-solve",
-                           notes=["all three moves in one NLP (move 1 alone is a third of it)",
-                                  "handover accuracy terms (servo.py) not included here"])
-
-    @benchmark("design_reference", "full reference design: every catalogue motor, pulley radius then teeth "
-                                   "(problems/deco2000_needle_bar.toml defaults)", target_s=10.0)
-    def _bench_design_reference() -> BenchResult:
-        import sys
-
-        from .problem import load_problem
-
-        # python-control (the servo loop of the handover accuracy term) is imported once per
-        # process, mostly scipy.signal and matplotlib: timed on its own row, not in the design
-        fresh = "control" not in sys.modules
-        t0 = time.perf_counter()
-        import control  # noqa: F401
-        imported = time.perf_counter() - t0
-        p = load_problem(reference_problem_path())
-        clear_cache()
-        t0 = time.perf_counter()
-        d = solve_design(p)
-        full = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        solve_design(load_problem(reference_problem_path(), ['design.motor_choice="fixed"',
-                                                             'design.pulley="fixed"']))
-        fixed = time.perf_counter() - t0
-        return BenchResult(rows=[BenchRow("catalogue design (7 motors, radius then teeth)", full,
-                                          f"chose {d.motor}, {d.pulley_teeth} teeth"),
-                                 BenchRow("one motor, one pulley (the thesis drive)", fixed),
-                                 BenchRow("import python-control (once per process, not in the design)", imported,
-                                          "" if fresh else "already imported by an earlier benchmark")],
-                           measured_s=full, ratio=full / fixed, ratio_label="catalogue / single drive",
-                           notes=["includes the servo-loop tuning of the handover accuracy term (once per process)"])
-
-    @benchmark("design_expand_jit", "CasADi options side by side on one design NLP (min peak acceleration, "
-                                    "jerk bound, 2 moves x 40 intervals): build + solve", target_s=None)
-    def _bench_design_expand_jit() -> BenchResult:
-        import shutil
-
-        from .problem import load_problem
-
-        p = load_problem(_known_optimum_path("jerk_bounded_peak_accel.toml"))
-        rows = []
-        times = {}
-        variants = [("expand=False (MX)", {"expand": False}), ("expand=True (SX)", {"expand": True})]
-        if shutil.which("gcc"):
-            variants.append(("expand=True + jit (gcc -O1)", {"expand": True, "jit": True, "compiler": "shell",
-                                                             "jit_options": {"flags": ["-O1"], "verbose": False}}))
-        for label, opts in variants:
-            clear_cache()
-            t0 = time.perf_counter()
-            d = solve_design(p, solver_options=opts)
-            build_solve = time.perf_counter() - t0
-            resolve = best_time(lambda o=opts: solve_design(p, solver_options=o, warm_start=d), repeat=3)
-            times[label] = (build_solve, resolve)
-            rows.append(BenchRow(label + ": build + solve", build_solve, f"C_a = {d.moves[0].C_a:.4f}"))
-            rows.append(BenchRow(label + ": re-solve (built)", resolve))
-        mx, sx = times["expand=False (MX)"], times["expand=True (SX)"]
-        return BenchResult(rows=rows, measured_s=sx[0], ratio=mx[0] / sx[0], ratio_label="MX / SX (build + solve)",
-                           notes=["jit pays a C compilation at every build; only a solver reused many times "
-                                  "can earn it back"])
-
-    @benchmark("design_vs_rockit", "min-jerk rest-to-rest move, h = 1 m, T = 1 s: strokeopt against rockit "
-                                   "(DirectCollocation N=50, degree 3), build + solve", target_s=None)
-    def _bench_design_vs_rockit() -> BenchResult:
-        from .problem import load_problem
-
-        def ours():
-            clear_cache()
-            p = load_problem(_known_optimum_path("min_jerk.toml"))
-            return solve_design(p).moves[0].C_a
-
-        c_ours = ours()
-        t_ours = best_time(ours, repeat=3)
-        rows = [BenchRow("strokeopt (load + build + solve, 2 moves x 40 intervals x degree 3)", t_ours,
-                         f"C_a error {100 * abs(c_ours / 5.773502692 - 1):.2g} %")]
-        notes = ["strokeopt solves the rise and the return (the cycle must close): twice rockit's work"]
-        try:
-            from rockit import DirectCollocation, Ocp
-        except ImportError:
-            notes.append("rockit not installed (pip install rockit-meco, the 'bench' extra): no comparison")
-            return BenchResult(rows=rows, measured_s=t_ours, ratio=float("nan"), ratio_label="rockit / strokeopt",
-                               notes=notes)
-
-        def theirs():
-            ocp = Ocp(T=1.0)
-            s, v, a = ocp.state(), ocp.state(), ocp.state()
-            j = ocp.control()
-            ocp.set_der(s, v)
-            ocp.set_der(v, a)
-            ocp.set_der(a, j)
-            for x, x0, x1 in ((s, 0, 1), (v, 0, 0), (a, 0, 0)):
-                ocp.subject_to(ocp.at_t0(x) == x0)
-                ocp.subject_to(ocp.at_tf(x) == x1)
-            ocp.add_objective(ocp.integral(j**2))
-            ocp.solver("ipopt", {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "expand": True})
-            ocp.method(DirectCollocation(N=50, degree=3))
-            sol = ocp.solve()
-            _, acc = sol.sample(a, grid="integrator", refine=20)
-            return float(np.max(np.abs(acc)))
-
-        c_theirs = theirs()
-        t_theirs = best_time(theirs, repeat=3)
-        rows.append(BenchRow("rockit (build + solve, 1 move x 50 intervals x degree 3)", t_theirs,
-                             f"C_a error {100 * abs(c_theirs / 5.773502692 - 1):.2g} %"))
-        return BenchResult(rows=rows, measured_s=t_ours, ratio=t_theirs / t_ours, ratio_label="rockit / strokeopt",
-                           notes=notes + ["target: strokeopt at least 3x faster end to end"])
-
-
-_register_benchmarks()

@@ -1,0 +1,143 @@
+"""Benchmarks of the design step: re-solve, the full reference design, CasADi options, rockit."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from ..design.solve import DriveChoice, _DriveSetup, _solve_one, _solver_options, clear_cache, solve_design
+from ..io.problem_file import load_problem
+from .registry import BenchResult, BenchRow, benchmark, best_time, reference_problem_path
+
+
+def _known_optimum_path(name: str):
+    return reference_problem_path().parent / "known_optima" / name
+
+
+@benchmark("design_resolve", "reference design, thesis drive fixed (055U2B30, 28 teeth), 600 spm: re-solve "
+                             "with the built solver (the step of a sweep)", target_s=0.5)
+def _bench_design_resolve() -> BenchResult:
+
+    p = load_problem(reference_problem_path(), ['design.motor_choice="fixed"', 'design.pulley="fixed"',
+                                                "machine.spm=600"])
+    s = replace(p.design, refinements=0)
+    drive = _DriveSetup(p, s)
+    choice = DriveChoice(drive.fixed_motor(), 28)
+    opts = _solver_options(s, None, False)
+    clear_cache()
+    t0 = time.perf_counter()
+    first = _solve_one(p, 600.0, s, s.mesh, s.objective, None, drive, choice, opts, with_terms=False)
+    cold = time.perf_counter() - t0
+    warm = best_time(lambda: _solve_one(p, 600.0, s, s.mesh, s.objective, first.sols, drive, choice, opts,
+                                        with_terms=False), repeat=3)
+    return BenchResult(rows=[BenchRow("first solve (builds the NLP and its derivatives)", cold,
+                                      f"3 moves, {s.mesh.intervals} intervals x degree {s.mesh.degree}"),
+                             BenchRow("re-solve, built solver, warm start", warm)],
+                       measured_s=warm, ratio=cold / warm, ratio_label="first / re-solve",
+                       notes=["all three moves in one NLP (move 1 alone is a third of it)",
+                              "handover accuracy terms (servo.py) not included here"])
+
+@benchmark("design_reference", "full reference design: every catalogue motor, pulley radius then teeth "
+                               "(problems/deco2000_needle_bar.toml defaults)", target_s=10.0)
+def _bench_design_reference() -> BenchResult:
+    import sys
+
+
+    # python-control (the servo loop of the handover accuracy term) is imported once per
+    # process, mostly scipy.signal and matplotlib: timed on its own row, not in the design
+    fresh = "control" not in sys.modules
+    t0 = time.perf_counter()
+    import control  # noqa: F401
+    imported = time.perf_counter() - t0
+    p = load_problem(reference_problem_path())
+    clear_cache()
+    t0 = time.perf_counter()
+    d = solve_design(p)
+    full = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    solve_design(load_problem(reference_problem_path(), ['design.motor_choice="fixed"',
+                                                         'design.pulley="fixed"']))
+    fixed = time.perf_counter() - t0
+    return BenchResult(rows=[BenchRow("catalogue design (7 motors, radius then teeth)", full,
+                                      f"chose {d.motor}, {d.pulley_teeth} teeth"),
+                             BenchRow("one motor, one pulley (the thesis drive)", fixed),
+                             BenchRow("import python-control (once per process, not in the design)", imported,
+                                      "" if fresh else "already imported by an earlier benchmark")],
+                       measured_s=full, ratio=full / fixed, ratio_label="catalogue / single drive",
+                       notes=["includes the servo-loop tuning of the handover accuracy term (once per process)"])
+
+@benchmark("design_expand_jit", "CasADi options side by side on one design NLP (min peak acceleration, "
+                                "jerk bound, 2 moves x 40 intervals): build + solve", target_s=None)
+def _bench_design_expand_jit() -> BenchResult:
+    import shutil
+
+
+    p = load_problem(_known_optimum_path("jerk_bounded_peak_accel.toml"))
+    rows = []
+    times = {}
+    variants = [("expand=False (MX)", {"expand": False}), ("expand=True (SX)", {"expand": True})]
+    if shutil.which("gcc"):
+        variants.append(("expand=True + jit (gcc -O1)", {"expand": True, "jit": True, "compiler": "shell",
+                                                         "jit_options": {"flags": ["-O1"], "verbose": False}}))
+    for label, opts in variants:
+        clear_cache()
+        t0 = time.perf_counter()
+        d = solve_design(p, solver_options=opts)
+        build_solve = time.perf_counter() - t0
+        resolve = best_time(lambda o=opts: solve_design(p, solver_options=o, warm_start=d), repeat=3)
+        times[label] = (build_solve, resolve)
+        rows.append(BenchRow(label + ": build + solve", build_solve, f"C_a = {d.moves[0].C_a:.4f}"))
+        rows.append(BenchRow(label + ": re-solve (built)", resolve))
+    mx, sx = times["expand=False (MX)"], times["expand=True (SX)"]
+    return BenchResult(rows=rows, measured_s=sx[0], ratio=mx[0] / sx[0], ratio_label="MX / SX (build + solve)",
+                       notes=["jit pays a C compilation at every build; only a solver reused many times "
+                              "can earn it back"])
+
+@benchmark("design_vs_rockit", "min-jerk rest-to-rest move, h = 1 m, T = 1 s: strokeopt against rockit "
+                               "(DirectCollocation N=50, degree 3), build + solve", target_s=None)
+def _bench_design_vs_rockit() -> BenchResult:
+
+    def ours():
+        clear_cache()
+        p = load_problem(_known_optimum_path("min_jerk.toml"))
+        return solve_design(p).moves[0].C_a
+
+    c_ours = ours()
+    t_ours = best_time(ours, repeat=3)
+    rows = [BenchRow("strokeopt (load + build + solve, 2 moves x 40 intervals x degree 3)", t_ours,
+                     f"C_a error {100 * abs(c_ours / 5.773502692 - 1):.2g} %")]
+    notes = ["strokeopt solves the rise and the return (the cycle must close): twice rockit's work"]
+    try:
+        from rockit import DirectCollocation, Ocp
+    except ImportError:
+        notes.append("rockit not installed (pip install rockit-meco, the 'bench' extra): no comparison")
+        return BenchResult(rows=rows, measured_s=t_ours, ratio=float("nan"), ratio_label="rockit / strokeopt",
+                           notes=notes)
+
+    def theirs():
+        ocp = Ocp(T=1.0)
+        s, v, a = ocp.state(), ocp.state(), ocp.state()
+        j = ocp.control()
+        ocp.set_der(s, v)
+        ocp.set_der(v, a)
+        ocp.set_der(a, j)
+        for x, x0, x1 in ((s, 0, 1), (v, 0, 0), (a, 0, 0)):
+            ocp.subject_to(ocp.at_t0(x) == x0)
+            ocp.subject_to(ocp.at_tf(x) == x1)
+        ocp.add_objective(ocp.integral(j**2))
+        ocp.solver("ipopt", {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "expand": True})
+        ocp.method(DirectCollocation(N=50, degree=3))
+        sol = ocp.solve()
+        _, acc = sol.sample(a, grid="integrator", refine=20)
+        return float(np.max(np.abs(acc)))
+
+    c_theirs = theirs()
+    t_theirs = best_time(theirs, repeat=3)
+    rows.append(BenchRow("rockit (build + solve, 1 move x 50 intervals x degree 3)", t_theirs,
+                         f"C_a error {100 * abs(c_theirs / 5.773502692 - 1):.2g} %"))
+    return BenchResult(rows=rows, measured_s=t_ours, ratio=t_theirs / t_ours, ratio_label="rockit / strokeopt",
+                       notes=notes + ["target: strokeopt at least 3x faster end to end"])
+
+

@@ -1,0 +1,274 @@
+"""What accuracy costs in stitch rate: the highest rate for each required handover accuracy."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from ..drive.sizing import bisect_highest
+from ..errors import ProblemError, SolverError
+from .loop import _tuned, TORQUE_BASIS, ServoSettings, axis_from_problem, handover_accuracy
+
+
+
+# --------------------------------------------------------------------------- what accuracy costs in time
+
+#: Required handover accuracies of the trade-off [mm].
+DEFAULT_ACCURACIES_MM = (0.02, 0.03, 0.05, 0.1, 0.2, 0.3, 0.5, 1.0)
+
+
+@dataclass
+class TradeoffPoint:
+    accuracy: float  # m
+    stroke: str  # "modified_sine" (the problem's law) or "optimal"
+    max_spm: float | None
+    binding: str
+    handover_error: float | None = None  # m, at max_spm
+    detail: str = ""
+
+    def as_dict(self) -> dict:
+        return {"accuracy_mm": self.accuracy * 1e3, "stroke": self.stroke, "max_spm": self.max_spm,
+                "binding": self.binding,
+                "handover_error_mm": None if self.handover_error is None else self.handover_error * 1e3,
+                "detail": self.detail}
+
+
+def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step: float = 50.0,
+                     lowest: float = 100.0, progress=None) -> list[TradeoffPoint]:
+    """Highest stitch rate with the problem's classic law for each required handover accuracy [m].
+
+    A rate is feasible when every sizing check of the problem's motor and
+    pulley passes (drive.py), the servo's torque command stays within its
+    limit, the sampling is shorter than every move, and the handover error is
+    at most the accuracy *at this rate and at every lower one* (so the curve
+    is monotone by definition: the error need not rise strictly with speed).
+    The binding limit is the one that fails just above the highest rate.
+    """
+    from ..drive.sizing import max_spm as drive_max_spm
+
+    accuracies = sorted(a * 1e-3 for a in DEFAULT_ACCURACIES_MM) if accuracies is None else sorted(accuracies)
+    settings = problem.servo or ServoSettings(file=str(problem.file))
+    axis = axis_from_problem(problem, settings)
+    gains = _tuned(axis, settings)
+    spec = problem.drive
+    cat = spec.catalogue()
+    motor = cat.motor(spec.motor, (spec.file, "drive.motor"))
+    pulley = next(p for p in cat.pulleys_of(spec.profile) if p.teeth == problem.pulley_teeth)
+    kin = problem.stroke().sample(3601)
+    drive_max, drive_binding = drive_max_spm(kin, problem.spm, motor, pulley, spec.load, spec.limits,
+                                             spec.belt_spec(cat), resolution=1.0)
+    drive_max = drive_max or 0.0
+    # the sampling: the shortest move must stay longer than a control cycle
+    sch = problem.timing.schedule(problem.spm)
+    move = min(d for itv, d in zip(problem.timing.intervals, sch.duration) if itv.is_move)
+    sampling_max = problem.spm * move / max(settings.control_cycle, settings.position_sampling)
+    cache: dict = {}
+
+    def evaluate(spm: float):
+        spm = round(spm, 6)
+        if spm not in cache:
+            res = handover_accuracy(problem, spm=spm, settings=settings, axis=axis, gains=gains)
+            cache[spm] = (res.handover_error, res.torque_limited)
+        return cache[spm]
+
+    top = min(drive_max, sampling_max * (1 - 1e-9))
+    top_binding = drive_binding if drive_max <= sampling_max else "sampling"
+    grid = list(np.arange(lowest, top, step)) + [top]
+    it = progress(grid) if progress else grid
+    errors = []
+    for spm in it:
+        e, sat = evaluate(spm)
+        errors.append((spm, e, sat))
+    points = []
+    best = None
+    for acc in accuracies:
+        def ok(x, acc=acc):
+            e, sat = evaluate(x)
+            return e <= acc and not sat
+        prev = None
+        fail = None
+        for spm, e, sat in errors:
+            if e <= acc and not sat:
+                prev = spm
+            else:
+                fail = (spm, "torque_limit" if sat else "handover_accuracy")
+                break
+        if fail is None:
+            max_spm, binding = top, top_binding
+        elif prev is None:
+            max_spm, binding = None, fail[1]
+        else:
+            max_spm = bisect_highest(ok, prev, fail[0], resolution)[0]
+            e_hi, sat_hi = evaluate(min(max_spm + resolution, fail[0]))
+            binding = "torque_limit" if sat_hi else "handover_accuracy"
+        if best is not None and (max_spm is None or max_spm < best):
+            max_spm = best  # the error stays within a looser accuracy wherever it met a tighter one
+        if max_spm is not None:
+            max_spm = math.floor(max_spm / resolution) * resolution if max_spm != top else math.floor(top)
+            best = max_spm
+        err = evaluate(max_spm)[0] if max_spm else None
+        points.append(TradeoffPoint(acc, problem.default_law.name, max_spm, binding, err))
+    return points
+
+
+def _binding_of(reason: str) -> str:
+    """The limit a failed design names first (its first line names the worst violated limit)."""
+    text = (reason.splitlines() or [""])[0].lower().replace("_", " ")
+    for key, name in (("handover accuracy", "handover_accuracy"), ("torque limit", "torque_limit"),
+                      ("rms", "rms_torque"), ("peak torque", "peak_torque"),
+                      ("speed", "peak_speed"), ("belt", "belt_tension"), ("jerk", "jerk"), ("inertia", "inertia_ratio")):
+        if key in text:
+            return name
+    return "solver"
+
+
+def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowest: float = 100.0,
+                     start: float | None = None, progress=None) -> list[TradeoffPoint]:
+    """Highest stitch rate with the optimal stroke (``design.solve_design`` with the handover
+    accuracy constraint, which includes :func:`servo_handover_error`) for each accuracy [m].
+
+    Bisection on the rate, one design solve per trial (warm-started). A rate
+    counts only when the design solves *and* its full simulation
+    (:func:`handover_accuracy`: table sampling, load forces, the handover
+    window) meets the accuracy without the torque command passing its limit:
+    the design's own term sees the end of the move with a continuous
+    reference only. The binding limit is what fails just above the highest rate. Tighter accuracies are solved first; a looser accuracy
+    starts from the rate the tighter one reached (the curve is monotone). The
+    motor and pulley are the problem's (``drive.motor``, ``pulley_teeth``), as
+    for the classic law, so the two curves compare strokes on one drive.
+    """
+    from ..design.solve import DesignSettings, solve_design
+
+    accuracies = sorted(a * 1e-3 for a in DEFAULT_ACCURACIES_MM) if accuracies is None else sorted(accuracies)
+    base = problem.design or DesignSettings()
+    start = problem.spm if start is None else start
+    points = []
+    lo_known = None
+    warm = None
+    it = progress(accuracies) if progress else accuracies
+    for acc in it:
+        # the same drive as the classic law: the problem's motor and pulley
+        settings = replace(base, accuracy=acc, motor_choice="fixed", pulley="fixed")
+        reasons: dict = {}
+        designs: dict = {}
+
+        def ok(spm, settings=settings, acc=acc):
+            nonlocal warm
+            try:
+                d = solve_design(problem, spm=spm, settings=settings, warm_start=warm)
+            except SolverError as exc:
+                reasons[round(spm, 6)] = exc.reason
+                return False
+            warm = d
+            # the design's accuracy term is the loop with a continuous reference at the end of the move:
+            # the rate counts only if the full simulation (table, load forces, window) agrees
+            res = handover_accuracy(problem, d.stroke, spm)
+            if res.torque_limited:
+                reasons[round(spm, 6)] = (f"torque limit: the servo's torque command reaches "
+                                          f"{res.peak_torque_command:.2f} N m, limit {res.torque_limit:.2f} N m")
+                return False
+            if res.handover_error > acc:
+                reasons[round(spm, 6)] = (f"handover accuracy: the full simulation of the design gives "
+                                          f"{res.handover_error * 1e3:.4f} mm")
+                return False
+            designs[spm] = (d, res)
+            return True
+
+        lo = lo_known if lo_known is not None else None
+        if lo is None:
+            x = start
+            while x >= lowest and not ok(x):
+                x /= 1.5
+            lo = x if x >= lowest else None
+        if lo is None:
+            reason = reasons.get(round(x * 1.5, 6), "")
+            points.append(TradeoffPoint(acc, "optimal", None, _binding_of(reason), None, reason))
+            continue
+        hi = lo * 1.25
+        while ok(hi):
+            lo, hi = hi, hi * 1.25
+        found = bisect_highest(ok, lo, hi, resolution)[0]
+        max_spm = math.floor(found / resolution) * resolution
+        fail_reason = reasons.get(min(reasons, key=lambda k: abs(k - found)), "") if reasons else ""
+        error, detail = None, fail_reason
+        if found in designs:
+            error = designs[found][1].handover_error
+            detail = f"at {found:.1f} spm the full simulation gives {error * 1e3:.4f} mm; above: {fail_reason}"
+        points.append(TradeoffPoint(acc, "optimal", max_spm, _binding_of(fail_reason), error, detail))
+        lo_known = max_spm
+    return points
+
+
+def tradeoff(problem, accuracies=None, *, strokes: str = "both", resolution: float = 10.0, step: float = 50.0,
+             progress=None) -> dict:
+    """The report of ``strokeopt tradeoff``: for each required handover accuracy the highest
+    stitch rate with the problem's classic law and with the optimal stroke, and the binding limit."""
+    if strokes not in ("both", "classic", "optimal"):
+        raise ProblemError("--strokes", "", f"{strokes!r} is not one of both, classic, optimal")
+    points = []
+    if strokes in ("both", "classic"):
+        points += tradeoff_classic(problem, accuracies, resolution=resolution, step=max(step, resolution),
+                                   progress=progress)
+    if strokes in ("both", "optimal"):
+        points += tradeoff_optimal(problem, accuracies, resolution=resolution, progress=progress)
+    return {"problem": problem.name, "motor": problem.drive.motor, "pulley_teeth": problem.pulley_teeth,
+            "law": problem.default_law.label, "resolution_spm": resolution, "torque_basis": TORQUE_BASIS,
+            "points": [p.as_dict() for p in points]}
+
+
+def tradeoff_text(report: dict) -> str:
+    from ..report.format import format_table
+
+    head = (f"{report['problem']}: highest stitch rate for a required handover accuracy "
+            f"(motor {report['motor']}, {report['pulley_teeth']}-tooth pulley; classic law {report['law']}; "
+            f"rates to {report['resolution_spm']:g} spm)\n{report['torque_basis']}")
+    return head + "\n\n" + format_table(report["points"], [
+        ("accuracy_mm", "accuracy mm"), ("stroke", "stroke"), ("max_spm", "max spm"), ("binding", "binding limit"),
+        ("handover_error_mm", "error at max mm")])
+
+
+def _words(name: str) -> str:
+    """An identifier as words for a figure: 'handover_accuracy' -> 'handover accuracy'."""
+    return str(name).replace("_", " ")
+
+
+def plot_tradeoff(report: dict, path: str | Path | None = None):
+    """Highest stitch rate over the required handover accuracy, one line per stroke, binding limits marked."""
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
+    markers = {"handover_accuracy": "o", "torque_limit": "s", "peak_torque": "s", "overload": "s",
+               "rms_torque": "D", "peak_speed": "^", "sampling": "v"}
+    for kind in dict.fromkeys(p["stroke"] for p in report["points"]):
+        pts = [p for p in report["points"] if p["stroke"] == kind and p["max_spm"] is not None]
+        if not pts:
+            continue
+        x = [p["accuracy_mm"] for p in pts]
+        y = [p["max_spm"] for p in pts]
+        line, = ax.plot(x, y, lw=1.4, label=_words(kind))
+        right = max(x)
+        for p in pts:
+            ax.plot(p["accuracy_mm"], p["max_spm"], markers.get(p["binding"], "x"), color=line.get_color())
+            last = p["accuracy_mm"] == right  # the rightmost label goes to the left of its point, inside the axes
+            ax.annotate(_words(p["binding"]), (p["accuracy_mm"], p["max_spm"]), xytext=(-4 if last else 4, -10),
+                        textcoords="offset points", fontsize=7, color=line.get_color(), ha="right" if last else "left")
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter
+
+    ax.set_xscale("log")
+    # ticks at the requested accuracies, as plain decimals (0.05, 0.1, 0.2), not 6e-2 / 2e-1
+    ax.xaxis.set_major_locator(FixedLocator(sorted({p["accuracy_mm"] for p in report["points"]})))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.margins(x=0.06)
+    ax.set_xlabel("required handover accuracy [mm]")
+    ax.set_ylabel("highest stitch rate [spm]")
+    ax.set_title(f"{report['problem']}: what accuracy costs in stitch rate")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig
