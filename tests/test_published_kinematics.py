@@ -38,7 +38,7 @@ APPENDIX_3 = {
 
 
 def _moves(problem, spm):
-    from strokeopt.report.format import kinematics_summary
+    from strokeopt.report.motion import kinematics_summary
 
     return kinematics_summary(problem, problem.stroke(spm), spm)["moves"]
 

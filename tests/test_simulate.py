@@ -288,7 +288,7 @@ def test_scene_figure_names_events_in_the_legend_not_on_the_curves(release):
 def test_sweep_figure_names_the_lag_onset_in_a_legend():
     import matplotlib.pyplot as plt
 
-    from strokeopt.report.plots import plot_sweep
+    from strokeopt.report.contact import plot_sweep
 
     rows = [{"scene": "release", "spm": s, "impact_velocity_m_s": 1 + s / 500, "min_gap_N_mm": 8 - s / 150,
              "lag": s >= 350} for s in (300, 350, 400, 450)]
@@ -301,7 +301,7 @@ def test_sweep_figure_names_the_lag_onset_in_a_legend():
 def test_tolerance_figure_readable_ticks_and_legend_off_the_data():
     import matplotlib.pyplot as plt
 
-    from strokeopt.report.plots import plot_tolerance_study
+    from strokeopt.report.contact import plot_tolerance_study
 
     rows = []
     for method, switching, eps in (("cvodes", "hard", 0.0), ("idas", "hard", 0.0), ("cvodes", "smoothed", 1e-3),

@@ -75,7 +75,7 @@ def test_jerk_unbounded_for_laws_with_acceleration_jumps(reference):
 
 
 def test_reported_span_is_the_angle_the_times_give(reference):
-    from strokeopt.report.format import kinematics_summary
+    from strokeopt.report.motion import kinematics_summary
 
     # published times put move 1 at 21.0-58.8 deg: 37.8 deg, against the nominal 37.4 (thesis Tab. 4.1)
     move1 = kinematics_summary(reference, reference.stroke(), 500)["moves"][0]

@@ -111,8 +111,9 @@ def cmd_laws(args) -> int:
 
 
 def cmd_kinematics(args) -> int:
-    from .report.plots import plot_kinematics
-    from .report.format import kinematics_summary, kinematics_text, to_json
+    from .report.motion import plot_kinematics
+    from .report.motion import kinematics_summary, kinematics_text
+    from .report.format import to_json
 
     problem = _load(args)
     stroke = problem.stroke()
@@ -338,7 +339,7 @@ def _report_scene(args, problem, scene, result, extra=None, kind: str = "simulat
 
 def cmd_simulate(args) -> int:
     from .report.format import format_table, to_json
-    from .report.plots import plot_sweep, plot_tolerance_study
+    from .report.contact import plot_sweep, plot_tolerance_study
     from .contact.simulate import STUDY_COLUMNS, SWEEP_COLUMNS, lag_onset_spm, parse_spm_range, simulate_scene, sweep_spm, tolerance_study
 
     spms = parse_spm_range(args.spm) if args.spm is not None else None
@@ -415,7 +416,8 @@ def cmd_verify(args) -> int:
 
 def cmd_solve(args) -> int:
     from .design.solve import OBJECTIVES, check_out_dir, compare_with_laws, design_summary, design_text, fastest_feasible, mesh_study, solve_design, sweep_design
-    from .report.plots import plot_design_sweep, plot_kinematics, plot_mesh_study
+    from .report.design import plot_design_sweep, plot_mesh_study
+    from .report.motion import plot_kinematics
     from .report.format import format_table, to_json
 
     sweep = None

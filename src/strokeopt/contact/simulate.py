@@ -168,7 +168,7 @@ class SceneResult:
 
     def plot(self, path=None):
         """The figure of :func:`strokeopt.plots.plot_scene`; written to ``path`` when given."""
-        from ..report.plots import plot_scene
+        from ..report.contact import plot_scene
 
         return plot_scene(self, path)
 

@@ -389,32 +389,6 @@ def _initial_unit(mesh: Mesh, rest_order: int) -> tuple[np.ndarray, np.ndarray, 
     return y, y1, a
 
 
-class _SizedBelt(Transmission):
-    """A belt pulley whose radius and inertia may be CasADi expressions (the radius as a decision variable).
-
-    The same ``x = r*phi`` as :class:`~strokeopt.transmission.BeltPulley`, for drive.py's
-    :func:`~strokeopt.drive.load_torque` to evaluate on the NLP's symbols.
-    """
-
-    name = "belt_pulley_sized"
-
-    def __init__(self, radius, inertia):
-        self.radius = radius
-        self.inertia = inertia
-
-    def position(self, phi):
-        return self.radius * phi
-
-    def inverse_position(self, x):
-        return x / self.radius
-
-    def motor_kinematics(self, x, v, a):
-        return x / self.radius, v / self.radius, a / self.radius
-
-    def symbolic_transfer(self, phi):
-        return self.radius * phi, self.radius + 0 * phi, 0 * phi
-
-
 @dataclass(frozen=True)
 class DriveChoice:
     """The parts of one solve: a motor (or the candidates of a Bonmin choice) and a pulley.
@@ -699,7 +673,7 @@ def _add_drive(ctx: _Context) -> None:
                 lambda c: _pulley_setting(c)[2] / r_ref)
     radius = rho * r_ref
     inertia = b.param("pulley inertia factor", lambda c: _pulley_setting(c)[3]) * drive.pulley_inertia(2 * radius)
-    trans = _SizedBelt(radius, inertia)
+    trans = BeltPulley(2 * radius, inertia)
     # the motor: fixed, or a Bonmin choice among candidates (binary weights)
     pct = drive.limits.peak_limit_pct / 100
 

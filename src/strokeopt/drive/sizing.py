@@ -469,7 +469,7 @@ class Sizing:
     def plot(self, path=None, candidate: Candidate | None = None):
         """The classic sizing picture for ``candidate`` (default: the best ranked); see
         :func:`strokeopt.plots.plot_sizing`."""
-        from ..report.plots import plot_sizing
+        from ..report.drive import plot_sizing
 
         return plot_sizing(self, candidate, path)
 

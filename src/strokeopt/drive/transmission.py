@@ -81,20 +81,29 @@ class Transmission:
 
 
 class BeltPulley(Transmission):
-    """A toothed belt on a pulley of pitch radius ``r``: ``x = r*phi``; ``inertia`` of the pulley [kg m^2]."""
+    """A toothed belt on a pulley of pitch radius ``r``: ``x = r*phi``; ``inertia`` of the pulley [kg m^2].
+
+    ``pitch_diameter`` and ``inertia`` may be CasADi expressions (a pulley radius that is a
+    decision variable of the design NLP); numbers are checked. ``teeth`` is the catalogue
+    tooth count, or None for a pulley of any radius.
+    """
 
     name = "belt_pulley"
 
-    def __init__(self, pitch_diameter: float, inertia: float = 0.0):
-        if not (pitch_diameter > 0 and math.isfinite(pitch_diameter)):
-            raise ValueError("pitch diameter must be positive")
-        if not (inertia >= 0 and math.isfinite(inertia)):
-            raise ValueError("pulley inertia must be zero or positive")
-        self.pitch_diameter = float(pitch_diameter)
-        self.inertia = float(inertia)
+    def __init__(self, pitch_diameter, inertia=0.0, teeth: int | None = None):
+        symbolic = isinstance(pitch_diameter, (ca.SX, ca.MX)) or isinstance(inertia, (ca.SX, ca.MX))
+        if not symbolic:
+            if not (pitch_diameter > 0 and math.isfinite(pitch_diameter)):
+                raise ValueError("pitch diameter must be positive")
+            if not (inertia >= 0 and math.isfinite(inertia)):
+                raise ValueError("pulley inertia must be zero or positive")
+            pitch_diameter, inertia = float(pitch_diameter), float(inertia)
+        self.pitch_diameter = pitch_diameter
+        self.inertia = inertia
+        self.teeth = teeth
 
     @property
-    def radius(self) -> float:
+    def radius(self):
         return self.pitch_diameter / 2
 
     def position(self, phi):
@@ -108,10 +117,18 @@ class BeltPulley(Transmission):
         phi = np.asarray(phi, dtype=float)
         return self.radius * phi, np.full_like(phi, self.radius), np.zeros_like(phi)
 
+    def symbolic_transfer(self, phi):
+        return self.radius * phi, self.radius + 0 * phi, 0 * phi
+
     def motor_angle(self, x):
         return np.asarray(x) / self.radius
 
+    def motor_kinematics(self, x, v, a):
+        return x / self.radius, v / self.radius, a / self.radius
+
     def __repr__(self) -> str:
+        if isinstance(self.pitch_diameter, (ca.SX, ca.MX)):
+            return "BeltPulley(pitch_diameter=<symbolic>)"
         return f"BeltPulley(pitch_diameter={self.pitch_diameter * 1e3:.3f} mm)"
 
 

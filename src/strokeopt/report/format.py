@@ -13,7 +13,6 @@ from typing import Any
 
 import numpy as np
 
-from ..motion.stroke import StrokeFunction
 
 
 def _clean(obj: Any, where: str = "") -> Any:
@@ -66,64 +65,3 @@ def format_table(rows: list[dict], columns: list[tuple[str, str]], title: str = 
     lines.append("  ".join("-" * w for w in widths))
     lines += ["  ".join(c.rjust(w) for c, w in zip(row, widths)) for row in cells]
     return "\n".join(lines)
-
-
-def kinematics_summary(problem, stroke: StrokeFunction, spm: float) -> dict:
-    """Peaks per interval of the bar and of the pulley, as the kinematics command reports them."""
-    r = problem.transmission.radius
-    sch = problem.timing.schedule(spm)
-    peaks = stroke.piece_peaks()
-    intervals, moves = [], []
-    deg = 180.0 / math.pi
-    for itv, pk, t0, dur in zip(problem.timing.intervals, peaks, sch.t_start, sch.duration):
-        row = {
-            "index": itv.index,
-            "name": itv.name,
-            "kind": "move" if itv.is_move else "dwell",
-            "law": itv.law.label if itv.is_move else None,
-            "stroke_mm": abs(itv.stroke) * 1e3,
-            "direction": ("up" if itv.stroke > 0 else "down") if itv.is_move else None,
-            "span_deg": 360.0 * dur / sch.period,  # the cam angle the interval takes at these times
-            "span_nominal_deg": itv.span_deg,  # as the timing diagram states it
-            "start_angle_deg": 360.0 * t0 / sch.period,
-            "end_angle_deg": 360.0 * (t0 + dur) / sch.period,
-            "time_s": dur,
-            "v_max_m_s": pk.v_max,
-            "a_max_m_s2": pk.a_max,
-            "jerk_max_m_s3": pk.j_max,
-            "pulley_speed_max_deg_s": pk.v_max / r * deg,
-            "pulley_speed_max_rpm": pk.v_max / r * 60 / (2 * math.pi),
-            "pulley_accel_max_deg_s2": pk.a_max / r * deg,
-        }
-        intervals.append(row)
-        if itv.is_move:
-            moves.append({"index": itv.move_index, "interval": itv.index, **{k: v for k, v in row.items() if k != "index"}})
-    return {
-        "problem": problem.name,
-        "spm": spm,
-        "cycle_time_s": sch.period,
-        "interval_times": problem.timing.interval_times,
-        "law": problem.default_law.name if len({m.law for m in problem.timing.moves}) == 1 else "mixed",
-        "law_params": problem.default_law.params,
-        "pulley_teeth": problem.pulley_teeth,
-        "pulley_pitch_diameter_mm": problem.transmission.pitch_diameter * 1e3,
-        "moves": moves,
-        "intervals": intervals,
-    }
-
-
-KINEMATICS_COLUMNS = [
-    ("index", "#"), ("name", "interval"), ("stroke_mm", "stroke mm"), ("span_deg", "span deg"),
-    ("time_s", "time s"), ("v_max_m_s", "v_max m/s"), ("a_max_m_s2", "a_max m/s2"),
-    ("jerk_max_m_s3", "jerk_max m/s3"), ("pulley_speed_max_deg_s", "pulley w deg/s"),
-    ("pulley_speed_max_rpm", "pulley rpm"), ("pulley_accel_max_deg_s2", "pulley eps deg/s2"),
-]
-
-
-def kinematics_text(summary: dict) -> str:
-    head = (f"{summary['problem']} at {summary['spm']:g} spm (cycle {summary['cycle_time_s'] * 1e3:.1f} ms, "
-            f"interval times {summary['interval_times']}), pulley {summary['pulley_teeth']} teeth, "
-            f"PD {summary['pulley_pitch_diameter_mm']:.2f} mm")
-    laws = sorted({m["law"] for m in summary["moves"]})
-    head += "\nmotion law: " + ", ".join(laws)
-    return head + "\n\n" + format_table(summary["intervals"], KINEMATICS_COLUMNS)

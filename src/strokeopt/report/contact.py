@@ -1,0 +1,112 @@
+"""Contact-model results: scene, speed sweep and tolerance-study figures."""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+
+
+def plot_scene(r, path=None):
+    """Driven and follower velocities and the remaining gap N over the cam angle; impact and release marked."""
+    ang = r.angle_deg
+    m = r.metrics
+    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(9, 8), constrained_layout=True)
+    ax = axes[0]
+    for b in r.velocities:
+        ax.plot(ang, r.velocities[b], lw=1.2 if b == r.driven else 1.0, label=b + (" (driven)" if b == r.driven else ""))
+    ax.set_ylabel("velocity [m/s]")
+    ax.legend(fontsize=8, loc="best")
+    ax = axes[1]
+    for b in r.positions:
+        ax.plot(ang, r.positions[b] * 1e3, lw=1.0, label=b)
+    ax.set_ylabel("position [mm]\n(toward handover)")
+    ax = axes[2]
+    if r.remaining_gap is not None:
+        ax.plot(ang, r.remaining_gap * 1e3, color="tab:purple", label=f"remaining gap N (N = {m['gap_N_mm']:g} mm)")
+        ax.axhline(0, color="0.5", lw=0.6)
+        ax.set_ylabel("remaining gap N [mm]")
+    else:
+        ax.plot(ang, r.drive_force, color="tab:gray", label="drive force")
+        ax.set_ylabel("drive force [N]")
+    # the event lines are named in the legends (placed clear of the data), not by text on the curves
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+        for key, color, text in (("lag_end_angle_deg", "tab:orange", "lag end"), ("impact_angle_deg", "tab:red", "impact"),
+                                 ("release_angle_deg", "tab:green", "release")):
+            if m.get(key) is not None:
+                ax.axvline(m[key], color=color, ls="--", lw=1, label=f"{text} {m[key]:.1f} deg")
+    axes[0].legend(fontsize=8, loc="best")
+    axes[2].legend(fontsize=8, loc="best")
+    lo = m.get("lag_onset_angle_deg") or 0.0
+    axes[-1].set_xlim(max(0.0, min(lo, 20.0) - 5), 90.0)
+    axes[-1].set_xlabel("cam angle [deg]")
+    iv = m.get("impact_velocity_m_s")
+    axes[0].set_title(f"scene {r.scene} at {r.spm:g} spm: impact "
+                      + (f"{iv:.2f} m/s" if iv is not None else "none"))
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig
+
+
+def plot_sweep(rows: list[dict], path=None):
+    """Impact velocity and min remaining gap N vs spm."""
+    spm = [r["spm"] for r in rows]
+    fig, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 6), constrained_layout=True)
+    axes[0].plot(spm, [np.nan if r["impact_velocity_m_s"] is None else r["impact_velocity_m_s"] for r in rows], "o-", ms=3)
+    axes[0].set_ylabel("impact velocity [m/s]")
+    axes[1].plot(spm, [np.nan if r["min_gap_N_mm"] is None else r["min_gap_N_mm"] for r in rows], "o-", ms=3,
+                 color="tab:purple")
+    axes[1].set_ylabel("min remaining gap N [mm]")
+    from ..contact.simulate import lag_onset_spm
+
+    onset = lag_onset_spm(rows)
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+        if onset is not None:
+            ax.axvline(onset, color="tab:orange", ls="--", lw=1, label=f"follower lags from {onset:g} spm")
+    if onset is not None:
+        axes[0].legend(fontsize=8, loc="best")  # named in a legend placed clear of the curve
+    axes[1].set_xlabel("speed [spm]")
+    axes[0].set_title(f"scene {rows[0]['scene']}: speed sweep" if rows else "speed sweep")
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig
+
+
+def plot_tolerance_study(study: dict, path=None):
+    """Work-precision: error of impact velocity and release angle vs CPU time."""
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
+    groups = {}
+    for r in study["rows"]:
+        if "failed" in r:
+            continue
+        groups.setdefault((r["method"], r["switching"], r["smoothing_mm"]), []).append(r)
+    for (mth, switching, eps), rows in groups.items():
+        label = f"{mth}, " + {"hard": "hard switches", "restarts": "restarts at switches"}.get(
+            switching, f"smoothing {eps:g} mm")
+        cpu = [r["cpu_time_s"] for r in rows]
+        for ax, key in zip(axes, ("impact_velocity_error_m_s", "release_angle_error_deg")):
+            ax.loglog(cpu, [max(r[key], 1e-12) if r[key] is not None else np.nan for r in rows], "o-", label=label)
+    axes[0].set_ylabel("impact velocity error [m/s]")
+    axes[1].set_ylabel("release angle error [deg]")
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    for ax in axes:
+        ax.set_xlabel("CPU time [s]")
+        ax.grid(True, which="both", alpha=0.3)
+        # plain decimals at 1, 2, 5 x 10^k; unlabelled minor ticks (a few tenths of a decade otherwise overlap)
+        ax.xaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+        ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.xaxis.set_minor_formatter(NullFormatter())
+    axes[0].axhline(1e-3, color="0.5", ls=":", lw=1)
+    axes[1].axhline(0.1, color="0.5", ls=":", lw=1)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=8)  # below the plots, off the data
+    fig.suptitle(f"work-precision, scene {study['scene']} at {study['spm']:g} spm")
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig

@@ -1,0 +1,118 @@
+"""Kinematics of a stroke: the summary table and its figure."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from ..motion.stroke import StrokeFunction
+from .figures import shade_dwells
+from .format import format_table
+
+
+def kinematics_summary(problem, stroke: StrokeFunction, spm: float) -> dict:
+    """Peaks per interval of the bar and of the pulley, as the kinematics command reports them."""
+    r = problem.transmission.radius
+    sch = problem.timing.schedule(spm)
+    peaks = stroke.piece_peaks()
+    intervals, moves = [], []
+    deg = 180.0 / math.pi
+    for itv, pk, t0, dur in zip(problem.timing.intervals, peaks, sch.t_start, sch.duration):
+        row = {
+            "index": itv.index,
+            "name": itv.name,
+            "kind": "move" if itv.is_move else "dwell",
+            "law": itv.law.label if itv.is_move else None,
+            "stroke_mm": abs(itv.stroke) * 1e3,
+            "direction": ("up" if itv.stroke > 0 else "down") if itv.is_move else None,
+            "span_deg": 360.0 * dur / sch.period,  # the cam angle the interval takes at these times
+            "span_nominal_deg": itv.span_deg,  # as the timing diagram states it
+            "start_angle_deg": 360.0 * t0 / sch.period,
+            "end_angle_deg": 360.0 * (t0 + dur) / sch.period,
+            "time_s": dur,
+            "v_max_m_s": pk.v_max,
+            "a_max_m_s2": pk.a_max,
+            "jerk_max_m_s3": pk.j_max,
+            "pulley_speed_max_deg_s": pk.v_max / r * deg,
+            "pulley_speed_max_rpm": pk.v_max / r * 60 / (2 * math.pi),
+            "pulley_accel_max_deg_s2": pk.a_max / r * deg,
+        }
+        intervals.append(row)
+        if itv.is_move:
+            moves.append({"index": itv.move_index, "interval": itv.index, **{k: v for k, v in row.items() if k != "index"}})
+    return {
+        "problem": problem.name,
+        "spm": spm,
+        "cycle_time_s": sch.period,
+        "interval_times": problem.timing.interval_times,
+        "law": problem.default_law.name if len({m.law for m in problem.timing.moves}) == 1 else "mixed",
+        "law_params": problem.default_law.params,
+        "pulley_teeth": problem.pulley_teeth,
+        "pulley_pitch_diameter_mm": problem.transmission.pitch_diameter * 1e3,
+        "moves": moves,
+        "intervals": intervals,
+    }
+
+
+KINEMATICS_COLUMNS = [
+    ("index", "#"), ("name", "interval"), ("stroke_mm", "stroke mm"), ("span_deg", "span deg"),
+    ("time_s", "time s"), ("v_max_m_s", "v_max m/s"), ("a_max_m_s2", "a_max m/s2"),
+    ("jerk_max_m_s3", "jerk_max m/s3"), ("pulley_speed_max_deg_s", "pulley w deg/s"),
+    ("pulley_speed_max_rpm", "pulley rpm"), ("pulley_accel_max_deg_s2", "pulley eps deg/s2"),
+]
+
+
+def kinematics_text(summary: dict) -> str:
+    head = (f"{summary['problem']} at {summary['spm']:g} spm (cycle {summary['cycle_time_s'] * 1e3:.1f} ms, "
+            f"interval times {summary['interval_times']}), pulley {summary['pulley_teeth']} teeth, "
+            f"PD {summary['pulley_pitch_diameter_mm']:.2f} mm")
+    laws = sorted({m["law"] for m in summary["moves"]})
+    head += "\nmotion law: " + ", ".join(laws)
+    return head + "\n\n" + format_table(summary["intervals"], KINEMATICS_COLUMNS)
+
+
+def plot_kinematics(problem, strokes, spm: float, path: str | Path | None = None, n: int = 3601):
+    """Position, velocity, acceleration and jerk over the cam angle; one line per stroke.
+
+    ``strokes`` is a StrokeFunction or a list of them. Dwells are shaded, the
+    handover point is marked. Returns the figure; writes it when ``path`` is given.
+    """
+    if not isinstance(strokes, (list, tuple)):
+        strokes = [strokes]
+    fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 9), constrained_layout=True)
+    j_peak = max(float(np.max(np.abs(s.sample(n).j))) for s in strokes)
+    jerk_unit = ("km/s$^3$", 1e-3) if j_peak >= 1e4 else ("m/s$^3$", 1.0)
+    units = [("position", "mm", 1e3), ("velocity", "m/s", 1.0), ("acceleration", "m/s$^2$", 1.0),
+             ("jerk", *jerk_unit)]
+    for stroke in strokes:
+        k = stroke.sample(n)
+        angle = 360.0 * k.t / stroke.period
+        for ax, y, (_, _, scale) in zip(axes, (k.s, k.v, k.a, k.j), units):
+            ax.plot(angle, y * scale, lw=1.4, label=stroke.label)
+    for ax, (name, unit, _) in zip(axes, units):
+        shade_dwells(ax, problem.timing, spm)
+        ax.set_ylabel(f"{name} [{unit}]")
+        ax.grid(True, alpha=0.3)
+        ax.axhline(0, color="0.5", lw=0.6)
+    move = problem.timing.handover_move
+    if move is not None:
+        sch = problem.timing.schedule(spm)
+        a_end = sch.end_angle_deg[move.index - 1]
+        for ax in axes:
+            ax.axvline(a_end, color="tab:red", ls="--", lw=1)
+        axes[0].annotate(f"handover ({move.end_position * 1e3:g} mm)", (a_end, move.end_position * 1e3),
+                         xytext=(8, 12), textcoords="offset points", color="tab:red")
+    axes[-1].set_xlabel("cam angle [deg]")
+    axes[-1].set_xlim(0, 360)
+    axes[-1].set_xticks(np.arange(0, 361, 30))
+    has_dwell = any(not i.is_move for i in problem.timing.intervals)
+    axes[0].set_title(f"{problem.name}: stroke at {spm:g} spm" + (" (dwells shaded)" if has_dwell else ""))
+    if len(strokes) > 1:
+        axes[0].legend(loc="best", fontsize=8)
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig
