@@ -312,8 +312,6 @@ def _sim_options(args):
 
 
 def _scene_name(args, problem) -> str:
-    from .errors import ProblemError
-
     if not problem.scenes:
         raise ProblemError(str(problem.file), "scenes", "the problem defines no [scenes.*] (and [model]) to simulate")
     name = args.scene or ("release" if "release" in problem.scenes else next(iter(problem.scenes)))
@@ -338,11 +336,11 @@ def _report_scene(args, problem, scene, result, extra=None, kind: str = "simulat
 
 
 def cmd_simulate(args) -> int:
-    from .report.format import format_table, to_json
     from .contact.simulate import simulate_scene
     from .contact.studies import lag_onset_spm, sweep_spm, tolerance_study
     from .io.ranges import parse_spm_range
     from .report.contact import STUDY_COLUMNS, SWEEP_COLUMNS, plot_sweep, plot_tolerance_study
+    from .report.format import format_table, to_json
 
     spms = parse_spm_range(args.spm) if args.spm is not None else None
     if spms is not None:
@@ -352,8 +350,6 @@ def cmd_simulate(args) -> int:
     options = _sim_options(args)
     if args.study == "tolerance":
         if isinstance(args.spm, list):
-            from .errors import ProblemError
-
             raise ProblemError("--spm", "", "the tolerance study runs at one speed, not a range")
         study = tolerance_study(problem, scene, problem.spm, progress=not args.json)
         if args.json:
