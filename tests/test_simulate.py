@@ -16,7 +16,7 @@ import pytest
 
 from strokeopt import ProblemError, SimulationOptions, load_problem, simulate_scene, sweep_spm
 from strokeopt.report.format import to_json
-from strokeopt.contact.simulate import lag_onset_spm, tolerance_study
+from strokeopt.contact.studies import lag_onset_spm, tolerance_study
 
 TIGHT = SimulationOptions(rtol=1e-7, atol=1e-8)
 
@@ -275,7 +275,9 @@ def _visible_tick_labels(ax, fig):
 def test_scene_figure_names_events_in_the_legend_not_on_the_curves(release):
     import matplotlib.pyplot as plt
 
-    fig = release[600].plot()
+    from strokeopt.report.contact import plot_scene
+
+    fig = plot_scene(release[600])
     axes = fig.axes
     assert all(not ax.texts for ax in axes)  # no free text lying on the curves
     labels = axes[0].get_legend().get_texts()

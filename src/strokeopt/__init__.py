@@ -40,7 +40,8 @@ from .contact.scene import Scene, make_scene
 from .servo.kernel import servo_handover_error  # noqa: F401  (registers the design term on import)
 from .servo.loop import AccuracyResult, DriveAxis, ServoSettings, accuracy_report, axis_from_problem, handover_accuracy
 from .servo.tradeoff import tradeoff
-from .contact.simulate import SceneResult, SimulationOptions, simulate_scene, sweep_spm, tolerance_study
+from .contact.simulate import SceneResult, SimulationOptions, simulate_scene
+from .contact.studies import sweep_spm, tolerance_study
 from .motion.stroke import Kinematics, Piece, StrokeFunction
 from .motion.timing import Interval, TimingDiagram
 from .drive.transmission import BeltPulley, ScrewLever, SliderCrank, Transmission, gt3_pitch_diameter

@@ -312,8 +312,6 @@ def _sim_options(args):
 
 
 def _scene_name(args, problem) -> str:
-    from .errors import ProblemError
-
     if not problem.scenes:
         raise ProblemError(str(problem.file), "scenes", "the problem defines no [scenes.*] (and [model]) to simulate")
     name = args.scene or ("release" if "release" in problem.scenes else next(iter(problem.scenes)))
@@ -323,8 +321,8 @@ def _scene_name(args, problem) -> str:
 
 
 def _report_scene(args, problem, scene, result, extra=None, kind: str = "simulate") -> None:
+    from .report.contact import plot_scene, scene_text
     from .report.format import to_json
-    from .contact.simulate import scene_text
 
     summary = {**(extra or {}), **result.summary()}
     if args.verbose:
@@ -334,13 +332,15 @@ def _report_scene(args, problem, scene, result, extra=None, kind: str = "simulat
         _emit(to_json(summary))
     else:
         print(scene_text(problem, scene, summary))
-    _write_figure(lambda p: result.plot(p), _plot_path(args, f"{kind}_{scene}"), args)
+    _write_figure(lambda p: plot_scene(result, p), _plot_path(args, f"{kind}_{scene}"), args)
 
 
 def cmd_simulate(args) -> int:
+    from .contact.simulate import simulate_scene
+    from .contact.studies import lag_onset_spm, sweep_spm, tolerance_study
+    from .io.ranges import parse_spm_range
+    from .report.contact import STUDY_COLUMNS, SWEEP_COLUMNS, plot_sweep, plot_tolerance_study
     from .report.format import format_table, to_json
-    from .report.contact import plot_sweep, plot_tolerance_study
-    from .contact.simulate import STUDY_COLUMNS, SWEEP_COLUMNS, lag_onset_spm, parse_spm_range, simulate_scene, sweep_spm, tolerance_study
 
     spms = parse_spm_range(args.spm) if args.spm is not None else None
     if spms is not None:
@@ -350,8 +350,6 @@ def cmd_simulate(args) -> int:
     options = _sim_options(args)
     if args.study == "tolerance":
         if isinstance(args.spm, list):
-            from .errors import ProblemError
-
             raise ProblemError("--spm", "", "the tolerance study runs at one speed, not a range")
         study = tolerance_study(problem, scene, problem.spm, progress=not args.json)
         if args.json:
@@ -393,23 +391,13 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_verify(args) -> int:
-    from .design.solve import read_design
-    from .errors import ProblemError
-    from .io.problem_file import load_problem
-    from .contact.simulate import simulate_scene
+    from .contact.verify import load_design, verify
 
-    data, stroke = read_design(args.design)
-    problem_file = args.problem or data.get("problem_file")
-    if not problem_file:
-        raise ProblemError(args.design, "problem_file", "is missing: pass --problem FILE")
-    path = Path(problem_file)
-    if not path.is_absolute() and not path.exists() and (Path(args.design).parent / path).exists():
-        path = Path(args.design).parent / path
-    problem = load_problem(path, list(args.overrides) + [f"machine.spm={float(data['spm'])!r}"])
-    args.problem = str(path)
-    scene = _scene_name(args, problem)
-    result = simulate_scene(problem, scene, problem.spm, stroke=stroke, options=_sim_options(args))
-    _report_scene(args, problem, scene, result, {"design": str(args.design), "objective": data.get("objective")},
+    design = load_design(args.design, args.problem, args.overrides)
+    args.problem = str(design.problem.file)
+    scene = _scene_name(args, design.problem)
+    result = verify(design, scene, _sim_options(args))
+    _report_scene(args, design.problem, scene, result, {"design": str(args.design), "objective": design.objective},
                   kind="verify")
     return 0
 
@@ -422,13 +410,9 @@ def cmd_solve(args) -> int:
 
     sweep = None
     if args.spm is not None and ":" in args.spm:
-        parts = args.spm.split(":")
-        if len(parts) != 3:
-            raise ProblemError("--spm", "", f"expected N or START:STOP:STEP, got {args.spm!r}")
-        start, stop, step = (_spm_value(x) for x in parts)
-        if stop < start:
-            raise ProblemError("--spm", "", f"STOP {stop:g} is below START {start:g}")
-        sweep = [start + k * step for k in range(int((stop - start) / step + 1e-9) + 1)]
+        from .io.ranges import parse_spm_range
+
+        sweep = parse_spm_range(args.spm)
         args.spm = None
     if args.objective is not None and args.objective not in OBJECTIVES:
         raise ProblemError("--objective", "", f"{args.objective!r} is not one of {', '.join(OBJECTIVES)}")

@@ -1,15 +1,70 @@
-"""Benchmark of the contact model: one cycle of the release scene, CasADi CVODES against scipy Radau."""
+"""Benchmark of the contact model: one cycle of the release scene, CasADi CVODES against scipy Radau.
+
+Both runs go through the same :func:`strokeopt.contact.simulate.integrate_scene` (the same scene
+ODE, stroke restarts, scaling, output grid and event location); only the stepper differs: CasADi's
+CVODES, or scipy's ``solve_ivp`` calling the scene's CasADi right-hand side and Jacobian from Python.
+"""
 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
+from functools import partial
 
-from ..contact.simulate import SimulationOptions, simulate_scene, simulate_scene_scipy
+import casadi as ca
+import numpy as np
+
+from ..contact.simulate import REFINE_POINTS, SceneResult, SimulationOptions, integrate_scene, simulate_scene
+from ..errors import SolverError
 from ..io.problem_file import load_problem
 from .registry import BenchResult, BenchRow, benchmark, reference_problem_path
 
 
 BENCH_ACCURACY_M_S = 1e-3  # impact velocity accuracy both integrators must reach
+
+
+class ScipyStepper:
+    """The stepper of :func:`integrate_scene` (see :class:`~strokeopt.contact.simulate.CasadiStepper`)
+    with scipy's ``solve_ivp`` (``method``, e.g. Radau); steps are counted as right-hand side calls."""
+
+    def __init__(self, ode, grid, opts: SimulationOptions, scene: str, spm: float, method: str = "Radau"):
+        from scipy.integrate import solve_ivp
+
+        self._solve_ivp = solve_ivp
+        self.ode, self.grid, self.scene, self.method = ode, grid, scene, method
+        self.rtol, self.atol = opts.rtol, opts.atol
+        self.name = f"scipy {method}"
+        self.jac = ca.Function("scene_jacobian", [ode.dae["t"], ode.dae["x"], ode.dae["p"]],
+                               [ca.jacobian(ode.dae["ode"], ode.dae["x"])])
+        self.segment_steps = 0
+
+    def _solve(self, pk, z0, span, t_eval):
+        rhs, jac = self.ode.rhs, self.jac
+        return self._solve_ivp(lambda s, y: np.asarray(rhs(s, y, pk)).ravel(), span, z0, method=self.method,
+                               t_eval=t_eval, rtol=self.rtol, atol=self.atol, jac=lambda s, y: np.asarray(jac(s, y, pk)))
+
+    def piece(self, k, piece, z, pk):
+        sol = self._solve(pk, z, (0.0, 1.0), self.grid[1:])
+        if not sol.success:
+            raise SolverError(f"scipy {self.method} failed in piece {k + 1} of scene {self.scene!r}: {sol.message}")
+        return sol.y, int(sol.nfev)
+
+    def segment(self, pk, z0, sa, sb):
+        sol = self._solve(list(pk), z0, (sa, sb), np.linspace(sa, sb, REFINE_POINTS + 1))
+        if not sol.success:
+            raise SolverError(f"scipy {self.method} failed refining an event of scene {self.scene!r}: {sol.message}")
+        self.segment_steps += int(sol.nfev)
+        return sol.y
+
+
+def simulate_scene_scipy(problem, scene: str, spm: float | None = None, rtol: float = 1e-6, atol: float = 1e-7,
+                         method: str = "Radau") -> SceneResult:
+    """:func:`~strokeopt.contact.simulate.simulate_scene` (the problem's stroke, hard switches) with scipy's
+    ``solve_ivp`` as the integrator: the reference peer of ``strokeopt bench``."""
+    opts = SimulationOptions(rtol=rtol, atol=atol)
+    result = integrate_scene(problem, scene, spm, None, opts, partial(ScipyStepper, method=method))
+    result.options = replace(opts, method=f"scipy-{method}")
+    return result
 
 
 @benchmark("simulate_release", "one cycle of the needle-bar release scene at 600 spm (CasADi CVODES vs scipy Radau, "

@@ -31,7 +31,9 @@ import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:  # the Fields reader lives in problem.py, which imports this module
+from .events import ROLE_KINDS, EventRoles
+
+if TYPE_CHECKING:  # type only: io/problem_file.py passes the Fields reader of [model] in
     from ..io.fields import Fields
 
 FRAME = "frame"
@@ -102,24 +104,6 @@ class Element:
     def elastic_force(self, c):
         """Force of the elastic part at compression ``c`` (numbers or CasADi expressions)."""
         return self.force_law(c) if self.force_law is not None else self.stiffness * c
-
-
-@dataclass(frozen=True)
-class EventRoles:
-    """Which elements define the needle-handover results (sources A.6 definitions).
-
-    * ``impact``: the contact whose first closing is the impact; its first body is the follower
-      that hits the stop (the control member);
-    * ``follower``: the body whose lag behind the driven body is reported (lag = x_driven - x_follower);
-    * ``gap``: the contact whose remaining gap is reported (gap N: ``gap - (x_a - x_b)``);
-    * ``release``: the grip whose acts_while condition ending is the release of the needle.
-    Any of them may be empty.
-    """
-
-    impact: str | None = None
-    follower: str | None = None
-    gap: str | None = None
-    release: str | None = None
 
 
 @dataclass(frozen=True)
@@ -261,8 +245,8 @@ def parse_model(f: "Fields | None") -> Model | None:
                 raise te.error(key, f"{value!r} is a {pool[value].kind}, expected a {' or '.join(kinds)}")
             return value
 
-        roles = EventRoles(role("impact", ("contact",), elements), role("follower", ("body",), bodies),
-                           role("gap", ("contact",), elements), role("release", ("grip",), elements))
+        roles = EventRoles(**{key: role(key, kinds, bodies if kinds == ("body",) else elements)
+                              for key, kinds in ROLE_KINDS.items()})
         te.finish()
     f.finish()
     return Model(bodies, springs, contacts, laws, roles, description)

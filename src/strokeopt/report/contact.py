@@ -1,10 +1,63 @@
-"""Contact-model results: scene, speed sweep and tolerance-study figures."""
+"""Contact-model results as text and figures: one simulated cycle, a speed sweep, the tolerance study.
+
+The contact package computes (contact/simulate.py, events.py, studies.py, verify.py);
+this module prints and draws what it returns: :func:`scene_text` and
+:func:`plot_scene` for a :class:`~strokeopt.contact.simulate.SceneResult`, the sweep
+and study tables' columns with :func:`plot_sweep` and :func:`plot_tolerance_study`.
+"""
 
 from __future__ import annotations
 
 import matplotlib.pyplot as plt
 import numpy as np
 
+from ..contact.events import LAG_THRESHOLD
+from ..contact.studies import lag_onset_spm
+
+SWEEP_COLUMNS = [("spm", "spm"), ("impact_velocity_m_s", "impact m/s"), ("impact_angle_deg", "impact deg"),
+                 ("lag", "lag"), ("lag_end_angle_deg", "lag end deg"), ("min_gap_N_mm", "min gap N mm"),
+                 ("release_angle_deg", "release deg"), ("premature_release", "premature"),
+                 ("peak_pad_force_N", "pad N"), ("cpu_time_s", "CPU s")]
+
+STUDY_COLUMNS = [("method", "method"), ("switching", "switching"), ("smoothing_mm", "smoothing mm"), ("rtol", "rtol"),
+                 ("impact_velocity_error_m_s", "impact v error m/s"), ("release_angle_error_deg", "release error deg"),
+                 ("impact_angle_error_deg", "impact angle error deg"), ("nsteps", "steps"), ("cpu_time_s", "CPU s")]
+
+
+def scene_text(problem, scene: str, summary: dict) -> str:
+    """The results of one simulated cycle as a short text report."""
+    sc = problem.scenes[scene]
+    roles = sc.model.events
+    s = summary
+    lines = [f"{problem.name}: scene {scene!r} ({', '.join(sc.bodies)}; {sc.state_size} states) at {s['spm']:g} spm, "
+             f"stroke: {s['stroke']}, interval times {problem.timing.interval_times}"]
+    if s["gap_N_mm"] is not None:
+        lines.append(f"gap N used by the model: {s['gap_N_mm']:g} mm (model.contacts.{roles.gap}.gap_mm)")
+    f = roles.follower or "follower"
+    if s["impact_velocity_m_s"] is not None:
+        lines.append(f"impact of {f} on the stop ({roles.impact}): {s['impact_velocity_m_s']:.3f} m/s "
+                     f"at {s['impact_angle_deg']:.2f} deg")
+    elif roles.impact in sc.elements:
+        lines.append(f"impact ({roles.impact}): none in this cycle")
+    if s["lag"]:
+        end = f"until {s['lag_end_angle_deg']:.2f} deg" if s["lag_end_angle_deg"] is not None else "not caught up in this cycle"
+        lines.append(f"{f} lags the {sc.driven}: from {s['lag_onset_angle_deg']:.2f} deg {end} "
+                     f"(largest lag before the impact {s['max_lag_mm']:.2f} mm)")
+    elif s["max_lag_mm"] is not None:
+        lines.append(f"{f} follows the {sc.driven} (no lag above {LAG_THRESHOLD * 1e6:g} um)")
+    if s["min_gap_N_mm"] is not None:
+        lines.append(f"smallest remaining gap N before the impact: {s['min_gap_N_mm']:.2f} mm")
+    if s["release_angle_deg"] is not None:
+        verdict = {True: "PREMATURE: gap N closed before the impact", False: "after the impact, not premature",
+                   None: "no impact to compare with"}[s["premature_release"]]
+        lines.append(f"needle released at {s['release_angle_deg']:.2f} deg ({verdict})")
+    if s["peak_pad_force_N"] is not None:
+        lines.append(f"peak pad force: {s['peak_pad_force_N']:.1f} N")
+    lines.append(f"peak force the drive supplies to the {sc.driven}: {s['peak_drive_force_N']:.1f} N")
+    lines.append("peak element forces [N] (on the output grid): " + ", ".join(f"{k} {v:.1f}" for k, v in s["peak_contact_forces_N"].items()))
+    sw = "hard switches" if s["smoothing_mm"] == 0 else f"smoothing {s['smoothing_mm']:g} mm"
+    lines.append(f"CPU time {s['cpu_time_s']:.3f} s ({s['method']}, rtol {s['rtol']:g}, atol {s['atol']:g}, {sw})")
+    return "\n".join(lines)
 
 
 def plot_scene(r, path=None):
@@ -59,8 +112,6 @@ def plot_sweep(rows: list[dict], path=None):
     axes[1].plot(spm, [np.nan if r["min_gap_N_mm"] is None else r["min_gap_N_mm"] for r in rows], "o-", ms=3,
                  color="tab:purple")
     axes[1].set_ylabel("min remaining gap N [mm]")
-    from ..contact.simulate import lag_onset_spm
-
     onset = lag_onset_spm(rows)
     for ax in axes:
         ax.grid(True, alpha=0.3)

@@ -1,0 +1,46 @@
+"""`--spm` values and START:STOP:STEP ranges (io/ranges.py), shared by `simulate` and `solve`."""
+
+from __future__ import annotations
+
+import pytest
+
+from strokeopt import ProblemError
+from strokeopt.cli import main
+from strokeopt.io.ranges import parse_spm_range
+
+
+@pytest.mark.parametrize("text, values", [
+    ("600", [600.0]),
+    ("300:400:50", [300.0, 350.0, 400.0]),
+    ("300:420:50", [300.0, 350.0, 400.0]),  # STOP is never passed
+    ("30:42:6", [30.0, 36.0, 42.0]),
+    ("500:500:10", [500.0]),
+    ("0.5:0.8:0.1", [0.5, 0.6, 0.7, 0.8]),  # round-off does not drop STOP
+])
+def test_values(text, values):
+    assert parse_spm_range(text) == pytest.approx(values)
+
+
+@pytest.mark.parametrize("text, words", [
+    ("fast", "expected SPM or START:STOP:STEP"),
+    ("300:400", "expected SPM or START:STOP:STEP"),
+    ("300:x:10", "expected SPM or START:STOP:STEP"),
+    ("300:200:10", "STEP > 0 and STOP >= START"),
+    ("300:400:0", "STEP > 0 and STOP >= START"),
+    ("300:400:-10", "STEP > 0 and STOP >= START"),
+    ("0", "speeds must be positive"),
+    ("-300:400:50", "speeds must be positive"),
+    ("300:inf:50", "speeds must be positive"),
+    ("nan", "speeds must be positive"),
+])
+def test_refused(text, words):
+    with pytest.raises(ProblemError, match="--spm") as exc:
+        parse_spm_range(text)
+    assert words in str(exc.value)
+
+
+@pytest.mark.parametrize("command", ["simulate", "solve"])
+def test_both_commands_refuse_alike(capsys, reference_path, command):
+    assert main([command, str(reference_path), "--spm", "900:400:50", "--plot", "none"]) == 2
+    err = capsys.readouterr().err
+    assert "--spm" in err and "STEP > 0 and STOP >= START" in err and err.count("\n") == 1
