@@ -10,7 +10,10 @@ import pytest
 
 from strokeopt import ProblemError, SolverError
 from strokeopt.servo.kernel import error_kernel
-from strokeopt.servo.loop import DriveAxis, ServoSettings, axis_from_problem, belt_stiffness, build_loop, handover_accuracy, loop_margins, residual_vibration_table, simulate_loop, tune
+from strokeopt.servo.accuracy import handover_accuracy, residual_vibration_table
+from strokeopt.servo.loop import build_loop, loop_margins, simulate_loop, tune
+from strokeopt.servo.plant import DriveAxis, axis_from_problem, belt_stiffness
+from strokeopt.servo.settings import ServoSettings
 
 
 @pytest.fixture(scope="module")
@@ -261,7 +264,7 @@ def test_tradeoff_optimal_names_its_limit_and_resimulates(reference):
 def test_tradeoff_figure_plain_ticks_words_and_labels_inside():
     import matplotlib.pyplot as plt
 
-    from strokeopt.servo.tradeoff import plot_tradeoff
+    from strokeopt.report.servo import plot_tradeoff
 
     pts = [{"accuracy_mm": a, "stroke": kind, "max_spm": spm + extra, "binding": b}
            for kind, extra in (("modified_sine", 0), ("optimal", 40))
