@@ -19,6 +19,7 @@ from .format import format_table
 
 
 def accuracy_text(report: dict) -> str:
+    """The text of ``strokeopt accuracy`` from the report of :func:`~strokeopt.servo.accuracy.accuracy_report`."""
     g = report["gains"]
     c = report["contributions_mm"]
     sc = report["signed_contributions_mm"]
@@ -114,6 +115,7 @@ def plot_accuracy(result: AccuracyResult, path: str | Path | None = None):
 
 
 def tradeoff_text(report: dict) -> str:
+    """The text of ``strokeopt tradeoff`` from the report of :func:`~strokeopt.servo.tradeoff.tradeoff`."""
     head = (f"{report['problem']}: highest stitch rate for a required handover accuracy "
             f"(motor {report['motor']}, {report['pulley_teeth']}-tooth pulley; classic law {report['law']}; "
             f"rates to {report['resolution_spm']:g} spm)\n{report['torque_basis']}")

@@ -90,7 +90,7 @@ class AccuracyResult:
         t1 = self.handover_time + self.loop.settings.handover_window / 360.0 * self.period
         return (self.t >= self.handover_time) & (self.t <= t1)
 
-    def _worst(self, arr):
+    def at_handover_worst(self, arr) -> float:
         """``arr`` at the instant of the largest |bar error| in the handover window (the end of the
         handover move itself included, interpolated)."""
         w = self._window()
@@ -101,9 +101,6 @@ class AccuracyResult:
             if abs(err[idx]) > abs(at_end):
                 return float(np.asarray(arr)[idx])
         return self.at_handover(arr)
-
-    def at_handover_worst(self, arr) -> float:
-        return self._worst(arr)
 
     @property
     def handover_error(self) -> float:
@@ -132,7 +129,7 @@ class AccuracyResult:
     def contributions(self) -> dict:
         """The handover error by cause [m]: servo tracking and belt stretch at the instant of the
         largest error in the handover window (signed; they add up to it), encoder quantisation as a bound."""
-        servo, belt, belt_load = (self._worst(a) for a in (self.servo, self.belt, self.belt_load))
+        servo, belt, belt_load = (self.at_handover_worst(a) for a in (self.servo, self.belt, self.belt_load))
         return {"servo_tracking": servo, "belt_stretch": belt, "encoder_quantisation": self.quantisation,
                 "belt_stretch_inertia": belt - belt_load, "belt_stretch_forces": belt_load}
 
