@@ -156,7 +156,7 @@ def test_accuracy_uses_the_drive_of_the_design(capsys, reference_path, tmp_path)
 
     from strokeopt.design.solve import DesignSettings, read_design, solve_design
     from strokeopt.io.problem_file import load_problem
-    from strokeopt.servo.loop import handover_accuracy
+    from strokeopt.servo.accuracy import handover_accuracy
 
     z22 = load_problem(reference_path, ["transmission.pulley_teeth=22"])
     settings = replace(z22.design or DesignSettings(), motor_choice="fixed", pulley="fixed", mesh_intervals=20)

@@ -1,4 +1,4 @@
-"""Servo loop and belt compliance (servo.py): the handover error and its causes."""
+"""Servo loop and belt compliance (servo/settings, plant, loop, accuracy, tradeoff): the handover error and its causes."""
 
 from __future__ import annotations
 
@@ -9,8 +9,11 @@ import numpy as np
 import pytest
 
 from strokeopt import ProblemError, SolverError
+from strokeopt.servo.accuracy import handover_accuracy, residual_vibration_table
 from strokeopt.servo.kernel import error_kernel
-from strokeopt.servo.loop import DriveAxis, ServoSettings, axis_from_problem, belt_stiffness, build_loop, handover_accuracy, loop_margins, residual_vibration_table, simulate_loop, tune
+from strokeopt.servo.loop import build_loop, loop_margins, simulate_loop, tune
+from strokeopt.servo.plant import DriveAxis, axis_from_problem, belt_stiffness
+from strokeopt.servo.settings import ServoSettings
 
 
 @pytest.fixture(scope="module")
@@ -179,6 +182,35 @@ def test_default_settings_without_a_servo_section(reference):
     assert 0 < res.handover_error < 0.5e-3
 
 
+def test_tuned_gains_are_the_rule_in_a_bounded_cache(setup):
+    from strokeopt.servo.loop import tuned_gains
+
+    _, settings, axis, gains = setup
+    assert tuned_gains(axis, settings) == gains
+    assert tuned_gains(axis, settings) is tuned_gains(axis, settings)
+    assert tuned_gains.cache_info().maxsize is not None  # bounded
+
+
+def test_servo_computes_and_report_draws():
+    # the servo modules import no report, bench or cli: their text and figures are in report/servo.py
+    import ast
+    from pathlib import Path
+
+    import strokeopt.servo.loop
+
+    for path in Path(strokeopt.servo.loop.__file__).parent.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Import):
+                names = [a.name.split(".")[1:2] for a in node.names if a.name.startswith("strokeopt.")]
+            elif isinstance(node, ast.ImportFrom):
+                module = (node.module or "").split(".")
+                names = [module[:1]] if node.level == 2 else [module[1:2]] if module[0] == "strokeopt" else []
+            else:
+                continue
+            for top in names:
+                assert top not in (["report"], ["bench"], ["cli"]), f"{path.name}:{node.lineno} imports {top[0]}"
+
+
 # --------------------------------------------------------------------------- the design constraint and the trade-off
 
 
@@ -261,7 +293,7 @@ def test_tradeoff_optimal_names_its_limit_and_resimulates(reference):
 def test_tradeoff_figure_plain_ticks_words_and_labels_inside():
     import matplotlib.pyplot as plt
 
-    from strokeopt.servo.tradeoff import plot_tradeoff
+    from strokeopt.report.servo import plot_tradeoff
 
     pts = [{"accuracy_mm": a, "stroke": kind, "max_spm": spm + extra, "binding": b}
            for kind, extra in (("modified_sine", 0), ("optimal", 40))

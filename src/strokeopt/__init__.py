@@ -38,7 +38,9 @@ from .problem import Problem
 from .io.problem_file import load_problem
 from .contact.scene import Scene, make_scene
 from .servo.kernel import servo_handover_error  # noqa: F401  (registers the design term on import)
-from .servo.loop import AccuracyResult, DriveAxis, ServoSettings, accuracy_report, axis_from_problem, handover_accuracy
+from .servo.accuracy import AccuracyResult, accuracy_report, handover_accuracy
+from .servo.plant import DriveAxis, axis_from_problem
+from .servo.settings import ServoSettings
 from .servo.tradeoff import tradeoff
 from .contact.simulate import SceneResult, SimulationOptions, simulate_scene
 from .contact.studies import sweep_spm, tolerance_study

@@ -215,7 +215,8 @@ def cmd_bench(args) -> int:
 
 def cmd_accuracy(args) -> int:
     from .report.format import to_json
-    from .servo.loop import accuracy_report, accuracy_text
+    from .report.servo import accuracy_text, plot_accuracy
+    from .servo.accuracy import accuracy_report
 
     stroke, label, extra = None, "", []
     if args.design:
@@ -246,7 +247,7 @@ def cmd_accuracy(args) -> int:
         _emit(to_json(report))
     else:
         print(accuracy_text(report))
-    _write_figure(lambda p: result.plot(p), _plot_path(args, "accuracy"), args)
+    _write_figure(lambda p: plot_accuracy(result, p), _plot_path(args, "accuracy"), args)
     return 0
 
 
@@ -275,7 +276,8 @@ def _design_drive(args, data: dict) -> dict:
 
 def cmd_tradeoff(args) -> int:
     from .report.format import to_json
-    from .servo.tradeoff import plot_tradeoff, tradeoff, tradeoff_text
+    from .report.servo import plot_tradeoff, tradeoff_text
+    from .servo.tradeoff import tradeoff
 
     problem = _load(args)
     accuracies = None

@@ -21,7 +21,7 @@ if TYPE_CHECKING:
     from .contact.scene import Scene
     from .design.solve import DesignSettings
     from .drive.sizing import DriveSpec
-    from .servo.loop import ServoSettings
+    from .servo.settings import ServoSettings
 
 
 @dataclass(frozen=True)

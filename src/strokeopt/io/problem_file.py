@@ -20,7 +20,7 @@ from ..errors import ProblemError
 from ..motion.laws import LAW_NAMES, LAW_PARAMETERS, MotionLaw, make_law
 from ..motion.timing import INTERVAL_TIMES, Interval, TimingDiagram
 from ..problem import Problem
-from ..servo.loop import parse_servo
+from ..servo.settings import parse_servo
 from .fields import _REQUIRED, Fields, apply_overrides
 
 

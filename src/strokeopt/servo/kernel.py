@@ -11,7 +11,10 @@ import numpy as np
 
 from ..drive.sizing import bisect_highest
 from ..errors import ProblemError, SolverError
-from .loop import _tuned, DriveAxis, Gains, ServoSettings, axis_from_problem, build_loop, handover_accuracy, tune
+from .accuracy import handover_accuracy
+from .loop import Gains, build_loop, tuned_gains as _tuned
+from .plant import DriveAxis, axis_from_problem
+from .settings import ServoSettings
 
 
 

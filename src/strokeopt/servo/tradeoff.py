@@ -1,17 +1,24 @@
-"""What accuracy costs in stitch rate: the highest rate for each required handover accuracy."""
+"""What accuracy costs in stitch rate: the highest rate for each required handover accuracy.
+
+Beside the flow: :func:`tradeoff` (``strokeopt tradeoff``) runs the accuracy
+prediction (:mod:`.accuracy`) with the problem's classic law over the stitch
+rate, and the design solve with the handover accuracy constraint for the
+optimal stroke; its text and figure are drawn by :mod:`strokeopt.report.servo`.
+"""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
-from pathlib import Path
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..drive.sizing import bisect_highest
 from ..errors import ProblemError, SolverError
-from .loop import _tuned, TORQUE_BASIS, ServoSettings, axis_from_problem, handover_accuracy
-
+from .accuracy import TORQUE_BASIS, handover_accuracy
+from .loop import tuned_gains
+from .plant import axis_from_problem
+from .settings import settings_of, shortest_move
 
 
 # --------------------------------------------------------------------------- what accuracy costs in time
@@ -41,7 +48,7 @@ def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step
     """Highest stitch rate with the problem's classic law for each required handover accuracy [m].
 
     A rate is feasible when every sizing check of the problem's motor and
-    pulley passes (drive.py), the servo's torque command stays within its
+    pulley passes (:mod:`strokeopt.drive.sizing`), the servo's torque command stays within its
     limit, the sampling is shorter than every move, and the handover error is
     at most the accuracy *at this rate and at every lower one* (so the curve
     is monotone by definition: the error need not rise strictly with speed).
@@ -50,9 +57,9 @@ def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step
     from ..drive.sizing import max_spm as drive_max_spm
 
     accuracies = sorted(a * 1e-3 for a in DEFAULT_ACCURACIES_MM) if accuracies is None else sorted(accuracies)
-    settings = problem.servo or ServoSettings(file=str(problem.file))
+    settings = settings_of(problem)
     axis = axis_from_problem(problem, settings)
-    gains = _tuned(axis, settings)
+    gains = tuned_gains(axis, settings)
     spec = problem.drive
     cat = spec.catalogue()
     motor = cat.motor(spec.motor, (spec.file, "drive.motor"))
@@ -62,8 +69,7 @@ def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step
                                              spec.belt_spec(cat), resolution=1.0)
     drive_max = drive_max or 0.0
     # the sampling: the shortest move must stay longer than a control cycle
-    sch = problem.timing.schedule(problem.spm)
-    move = min(d for itv, d in zip(problem.timing.intervals, sch.duration) if itv.is_move)
+    move = shortest_move(problem.timing, problem.spm)
     sampling_max = problem.spm * move / max(settings.control_cycle, settings.position_sampling)
     cache: dict = {}
 
@@ -128,7 +134,7 @@ def _binding_of(reason: str) -> str:
 def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowest: float = 100.0,
                      start: float | None = None, progress=None) -> list[TradeoffPoint]:
     """Highest stitch rate with the optimal stroke (``design.solve_design`` with the handover
-    accuracy constraint, which includes :func:`servo_handover_error`) for each accuracy [m].
+    accuracy constraint, which includes :func:`.kernel.servo_handover_error`) for each accuracy [m].
 
     Bisection on the rate, one design solve per trial (warm-started). A rate
     counts only when the design solves *and* its full simulation
@@ -217,58 +223,3 @@ def tradeoff(problem, accuracies=None, *, strokes: str = "both", resolution: flo
     return {"problem": problem.name, "motor": problem.drive.motor, "pulley_teeth": problem.pulley_teeth,
             "law": problem.default_law.label, "resolution_spm": resolution, "torque_basis": TORQUE_BASIS,
             "points": [p.as_dict() for p in points]}
-
-
-def tradeoff_text(report: dict) -> str:
-    from ..report.format import format_table
-
-    head = (f"{report['problem']}: highest stitch rate for a required handover accuracy "
-            f"(motor {report['motor']}, {report['pulley_teeth']}-tooth pulley; classic law {report['law']}; "
-            f"rates to {report['resolution_spm']:g} spm)\n{report['torque_basis']}")
-    return head + "\n\n" + format_table(report["points"], [
-        ("accuracy_mm", "accuracy mm"), ("stroke", "stroke"), ("max_spm", "max spm"), ("binding", "binding limit"),
-        ("handover_error_mm", "error at max mm")])
-
-
-def _words(name: str) -> str:
-    """An identifier as words for a figure: 'handover_accuracy' -> 'handover accuracy'."""
-    return str(name).replace("_", " ")
-
-
-def plot_tradeoff(report: dict, path: str | Path | None = None):
-    """Highest stitch rate over the required handover accuracy, one line per stroke, binding limits marked."""
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
-    markers = {"handover_accuracy": "o", "torque_limit": "s", "peak_torque": "s", "overload": "s",
-               "rms_torque": "D", "peak_speed": "^", "sampling": "v"}
-    for kind in dict.fromkeys(p["stroke"] for p in report["points"]):
-        pts = [p for p in report["points"] if p["stroke"] == kind and p["max_spm"] is not None]
-        if not pts:
-            continue
-        x = [p["accuracy_mm"] for p in pts]
-        y = [p["max_spm"] for p in pts]
-        line, = ax.plot(x, y, lw=1.4, label=_words(kind))
-        right = max(x)
-        for p in pts:
-            ax.plot(p["accuracy_mm"], p["max_spm"], markers.get(p["binding"], "x"), color=line.get_color())
-            last = p["accuracy_mm"] == right  # the rightmost label goes to the left of its point, inside the axes
-            ax.annotate(_words(p["binding"]), (p["accuracy_mm"], p["max_spm"]), xytext=(-4 if last else 4, -10),
-                        textcoords="offset points", fontsize=7, color=line.get_color(), ha="right" if last else "left")
-    from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter
-
-    ax.set_xscale("log")
-    # ticks at the requested accuracies, as plain decimals (0.05, 0.1, 0.2), not 6e-2 / 2e-1
-    ax.xaxis.set_major_locator(FixedLocator(sorted({p["accuracy_mm"] for p in report["points"]})))
-    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-    ax.xaxis.set_minor_formatter(NullFormatter())
-    ax.margins(x=0.06)
-    ax.set_xlabel("required handover accuracy [mm]")
-    ax.set_ylabel("highest stitch rate [spm]")
-    ax.set_title(f"{report['problem']}: what accuracy costs in stitch rate")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(loc="best", fontsize=8)
-    if path is not None:
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
-    return fig

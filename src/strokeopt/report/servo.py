@@ -1,0 +1,168 @@
+"""The servo's reports: the text and figure of ``strokeopt accuracy`` and of ``strokeopt tradeoff``.
+
+The servo package computes (:func:`strokeopt.servo.accuracy.accuracy_report`,
+:func:`strokeopt.servo.tradeoff.tradeoff`); this module writes its reports as
+text tables and draws its figures.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..servo.accuracy import AccuracyResult
+from .format import format_table
+
+
+# --------------------------------------------------------------------------- strokeopt accuracy
+
+
+def accuracy_text(report: dict) -> str:
+    """The text of ``strokeopt accuracy`` from the report of :func:`~strokeopt.servo.accuracy.accuracy_report`."""
+    g = report["gains"]
+    c = report["contributions_mm"]
+    sc = report["signed_contributions_mm"]
+    lines = []
+    used = report.get("drive_from_design")
+    if used:
+        lines += [
+            f"drive of the design {used['design']}: motor {used.get('motor', report['motor'])}, pulley "
+            f"{used.get('pulley_teeth', '-')} teeth (from the design file, not the problem file)",
+            # The design solve checks the bar error at the end of the handover move only, for a continuous
+            # reference (the error as a linear functional of the stroke's acceleration). This report simulates
+            # the full loop: the position table sampled (worst of several table phases), the largest error
+            # over the whole handover window after the move, plus one encoder count. It is therefore the
+            # larger of the two, by the window's belt ringing and the sampling.
+            "  note: the design solve checks the error at the end of the handover move with a continuous "
+            "reference; below is the full loop (sampled table, largest error over the handover window, plus one "
+            "encoder count), so it can be larger",
+        ]
+    lines += [
+        f"{report['problem']} at {report['spm']:g} spm, {report['label']}: motor {report['motor']}, "
+        f"pulley PD {report['pulley_pitch_diameter_mm']:.2f} mm, moving mass {report['moving_mass_kg']:g} kg",
+        f"belt {report['belt_stiffness_N_per_mm']:.0f} N/mm at the carrier ({report['belt_stiffness_source']}), "
+        f"belt mode {report['belt_resonance_Hz']:.0f} Hz",
+        f"servo loop: Kp {g['position_gain_1_s']:.1f} 1/s, Kv {g['speed_gain_N_m_s_rad']:.4g} N m s/rad, "
+        f"Ti {g['speed_integral_time_ms']:.2f} ms, speed bandwidth {g['speed_bandwidth_Hz']:.1f} Hz; "
+        f"loop delay {report['loop_delay_us']:.0f} us; feed-forward velocity "
+        f"{'on' if report['velocity_feedforward'] else 'off'}, acceleration "
+        f"{'on' if report['acceleration_feedforward'] else 'off'}",
+        f"  tuning: {g['tuning']}",
+        f"  margins: gain {report['margins']['gain_margin']:.2f}, phase {report['margins']['phase_margin_deg']:.1f} deg, "
+        f"modulus {report['margins']['modulus_margin']:.2f}",
+        "",
+        f"handover error (largest over {report['handover_window_deg']:g} deg after the end of the handover move at "
+        f"{report['handover_angle_deg']:.1f} deg): {report['handover_error_mm']:.4f} mm "
+        f"(requirement {report['requirement_mm']:g} mm)",
+        f"  servo tracking        {sc['servo_tracking']:+.4f} mm  (pulley {report['pulley_error_at_handover_deg']:.3f} deg)",
+        f"  belt stretch          {sc['belt_stretch']:+.4f} mm  (inertia {sc['belt_stretch_inertia']:+.4f}, "
+        f"forces {sc['belt_stretch_forces']:+.4f})",
+        f"  encoder quantisation  {c['encoder_quantisation']:.4f} mm  (one count, added as a bound)",
+        f"over the cycle: max error {report['max_error_mm']:.4f} mm, max servo error "
+        f"{report['max_servo_error_mm']:.4f} mm, max belt stretch {report['max_belt_stretch_mm']:.4f} mm; "
+        f"residual belt vibration in the dwell after the handover {report['residual_vibration_mm']:.4f} mm",
+        f"peak torque command {report['peak_torque_command_N_m']:.3f} N m (limit {report['torque_limit_N_m']:.2f} N m)",
+        f"  {report['torque_basis']}",
+    ]
+    if report["torque_limited"]:
+        lines.append("WARNING: the torque command exceeds the limit: the drive saturates and the linear prediction "
+                     "above does not hold")
+    if "laws" in report:
+        lines += ["", format_table(report["laws"], [
+            ("law", "law"), ("handover_error_mm", "handover mm"), ("residual_vibration_mm", "residual belt vib. mm"),
+            ("max_error_mm", "max error mm"), ("max_belt_stretch_mm", "max belt mm"),
+            ("peak_torque_command_N_m", "peak torque N m"), ("torque_limited", "saturates")],
+            title=f"Motion laws at {report['spm']:g} spm on the same drive")]
+    return "\n".join(lines)
+
+
+def plot_accuracy(result: AccuracyResult, path: str | Path | None = None):
+    """Commanded vs. actual bar position, and the error and its parts over the cam angle."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 1, sharex=True, figsize=(9, 7), constrained_layout=True)
+    ang = result.angle_deg
+    ax = axes[0]
+    ax.plot(ang, result.s_cmd * 1e3, lw=1.4, label="commanded")
+    ax.plot(ang, result.x * 1e3, lw=1.0, ls="--", label="actual (bar)")
+    ax.set_ylabel("bar position [mm]")
+    ax.legend(loc="best", fontsize=8)
+    ax = axes[1]
+    ax.plot(ang, result.error * 1e3, lw=1.4, color="k", label="bar error (commanded - actual)")
+    ax.plot(ang, result.servo * 1e3, lw=1.0, label="servo tracking")
+    ax.plot(ang, result.belt * 1e3, lw=1.0, label="belt stretch")
+    ax.set_ylabel("error [mm]")
+    ax.legend(loc="best", fontsize=8)
+    h_ang = 360.0 * (result.handover_time - result.loop.settings.sum_small_time_constants) / result.period
+    for a in axes:
+        a.axvline(h_ang, color="tab:red", ls="--", lw=1)
+        a.axvspan(h_ang, h_ang + result.loop.settings.handover_window, color="tab:red", alpha=0.08, lw=0)
+        a.grid(True, alpha=0.3)
+    axes[1].annotate(f"handover: {result.handover_error * 1e3:.3f} mm", (h_ang, result.at_handover(result.error) * 1e3),
+                     xytext=(10, 10), textcoords="offset points", color="tab:red")
+    axes[1].set_xlabel("cam angle [deg]")
+    axes[1].set_xlim(0, 360)
+    axes[1].set_xticks(np.arange(0, 361, 30))
+    axes[0].set_title(f"{result.label} at {result.spm:g} spm: handover error {result.handover_error * 1e3:.3f} mm")
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig
+
+
+# --------------------------------------------------------------------------- strokeopt tradeoff
+
+
+def tradeoff_text(report: dict) -> str:
+    """The text of ``strokeopt tradeoff`` from the report of :func:`~strokeopt.servo.tradeoff.tradeoff`."""
+    head = (f"{report['problem']}: highest stitch rate for a required handover accuracy "
+            f"(motor {report['motor']}, {report['pulley_teeth']}-tooth pulley; classic law {report['law']}; "
+            f"rates to {report['resolution_spm']:g} spm)\n{report['torque_basis']}")
+    return head + "\n\n" + format_table(report["points"], [
+        ("accuracy_mm", "accuracy mm"), ("stroke", "stroke"), ("max_spm", "max spm"), ("binding", "binding limit"),
+        ("handover_error_mm", "error at max mm")])
+
+
+def _words(name: str) -> str:
+    """An identifier as words for a figure: 'handover_accuracy' -> 'handover accuracy'."""
+    return str(name).replace("_", " ")
+
+
+def plot_tradeoff(report: dict, path: str | Path | None = None):
+    """Highest stitch rate over the required handover accuracy, one line per stroke, binding limits marked."""
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
+    markers = {"handover_accuracy": "o", "torque_limit": "s", "peak_torque": "s", "overload": "s",
+               "rms_torque": "D", "peak_speed": "^", "sampling": "v"}
+    for kind in dict.fromkeys(p["stroke"] for p in report["points"]):
+        pts = [p for p in report["points"] if p["stroke"] == kind and p["max_spm"] is not None]
+        if not pts:
+            continue
+        x = [p["accuracy_mm"] for p in pts]
+        y = [p["max_spm"] for p in pts]
+        line, = ax.plot(x, y, lw=1.4, label=_words(kind))
+        right = max(x)
+        for p in pts:
+            ax.plot(p["accuracy_mm"], p["max_spm"], markers.get(p["binding"], "x"), color=line.get_color())
+            last = p["accuracy_mm"] == right  # the rightmost label goes to the left of its point, inside the axes
+            ax.annotate(_words(p["binding"]), (p["accuracy_mm"], p["max_spm"]), xytext=(-4 if last else 4, -10),
+                        textcoords="offset points", fontsize=7, color=line.get_color(), ha="right" if last else "left")
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter
+
+    ax.set_xscale("log")
+    # ticks at the requested accuracies, as plain decimals (0.05, 0.1, 0.2), not 6e-2 / 2e-1
+    ax.xaxis.set_major_locator(FixedLocator(sorted({p["accuracy_mm"] for p in report["points"]})))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.margins(x=0.06)
+    ax.set_xlabel("required handover accuracy [mm]")
+    ax.set_ylabel("highest stitch rate [spm]")
+    ax.set_title(f"{report['problem']}: what accuracy costs in stitch rate")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig

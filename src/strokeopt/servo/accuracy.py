@@ -1,0 +1,281 @@
+"""How far the bar is from its commanded position: the handover accuracy prediction.
+
+Last step of the servo flow: :func:`handover_accuracy` builds the loop
+(:mod:`.loop`) of the problem's axis (:mod:`.plant`), drives it with the
+stroke's position table and returns an :class:`AccuracyResult` (commanded and
+actual bar motion over one periodic cycle, the error and its causes);
+:func:`accuracy_report` is the data of ``strokeopt accuracy`` (its text and
+figure are drawn by :mod:`strokeopt.report.servo`).
+
+* **Torque limit**: the model is linear: where the torque command exceeds
+  the axis's limit the prediction does not hold, and the result says so
+  (``torque_limited``) instead of reporting a number that is not true.
+* **Encoder quantisation**: the position loop cannot resolve less than one
+  encoder count; one count at the bar (``2 pi r / counts``) is added to the
+  handover error as a bound.
+* **Table phase**: where the table points fall relative to the stroke is
+  chance: the result is the worst of :data:`TABLE_PHASES`.
+
+The bar's error ``x_cmd - x`` splits exactly into the servo tracking error
+``r (theta_cmd - theta)`` (what the drive itself reports as following
+error) and the belt stretch ``r theta - x``; the belt stretch is split
+further by superposition into its parts due to the bar's inertia and due
+to the external forces.
+
+The handover error is the largest bar error over ``handover_window_deg``
+after the end of the handover move, plus one encoder count.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .loop import (Gains, ServoLoop, build_loop, cycle_grid, loop_margins, periodic_response, reference_signals,
+                   tuned_gains)
+from .plant import DriveAxis, axis_from_problem
+from .settings import ServoSettings, check_sampling, settings_of
+
+#: Keys of ``contributions_mm`` in an accuracy report.
+CONTRIBUTIONS = ("servo_tracking", "belt_stretch", "encoder_quantisation")
+
+
+@dataclass
+class AccuracyResult:
+    """Commanded vs. actual bar motion over one periodic cycle and the handover error.
+
+    Arrays over ``t`` (one cycle, seconds): ``s_cmd``, ``x`` [m], errors [m]
+    ``servo``, ``belt``, ``belt_inertia``, ``belt_load``; ``error = servo + belt``
+    (= s_cmd - x), ``tau_cmd`` [N m]. Its figure: :func:`strokeopt.report.servo.plot_accuracy`.
+    """
+
+    spm: float
+    period: float
+    t: np.ndarray
+    s_cmd: np.ndarray
+    x: np.ndarray
+    servo: np.ndarray
+    belt: np.ndarray
+    belt_load: np.ndarray
+    tau_cmd: np.ndarray
+    handover_time: float
+    handover_index: int
+    quantisation: float
+    torque_limit: float
+    loop: ServoLoop
+    label: str = ""
+    residual_window: tuple[float, float] = (0.0, 0.0)
+    error_load: np.ndarray | None = None  # bar error caused by the external forces alone [m]
+
+    @property
+    def error(self) -> np.ndarray:
+        return self.servo + self.belt
+
+    @property
+    def belt_inertia(self) -> np.ndarray:
+        return self.belt - self.belt_load
+
+    @property
+    def angle_deg(self) -> np.ndarray:
+        """Cam angle of the commanded stroke [deg] (the loop delay, common to every axis, taken out)."""
+        return 360.0 * (self.t - self.loop.settings.sum_small_time_constants) / self.period
+
+    def at_handover(self, arr) -> float:
+        return float(np.interp(self.handover_time, self.t, arr))
+
+    def _window(self) -> np.ndarray:
+        """Samples from the end of the handover move over ``handover_window_deg`` of cam angle."""
+        t1 = self.handover_time + self.loop.settings.handover_window / 360.0 * self.period
+        return (self.t >= self.handover_time) & (self.t <= t1)
+
+    def at_handover_worst(self, arr) -> float:
+        """``arr`` at the instant of the largest |bar error| in the handover window (the end of the
+        handover move itself included, interpolated)."""
+        w = self._window()
+        err = self.error
+        at_end = self.at_handover(err)
+        if np.any(w):
+            idx = np.flatnonzero(w)[np.argmax(np.abs(err[w]))]
+            if abs(err[idx]) > abs(at_end):
+                return float(np.asarray(arr)[idx])
+        return self.at_handover(arr)
+
+    @property
+    def handover_error(self) -> float:
+        """Largest |s_cmd - x| over the handover window plus one encoder count [m]."""
+        return abs(self.at_handover_worst(self.error)) + self.quantisation
+
+    @property
+    def peak_torque_command(self) -> float:
+        return float(np.max(np.abs(self.tau_cmd)))
+
+    @property
+    def torque_limited(self) -> bool:
+        return self.peak_torque_command > self.torque_limit
+
+    @property
+    def residual_vibration(self) -> float:
+        """Residual vibration of the belt mode [m]: the largest deviation of the belt stretch in the
+        dwell after the handover from its value at the end of that dwell (where it has died out)."""
+        t0, t1 = self.residual_window
+        mask = (self.t >= t0) & (self.t <= t1)
+        if not np.any(mask):
+            return 0.0
+        e = self.belt[mask]
+        return float(np.max(np.abs(e - e[-1])))
+
+    def contributions(self) -> dict:
+        """The handover error by cause [m]: servo tracking and belt stretch at the instant of the
+        largest error in the handover window (signed; they add up to it), encoder quantisation as a bound."""
+        servo, belt, belt_load = (self.at_handover_worst(a) for a in (self.servo, self.belt, self.belt_load))
+        return {"servo_tracking": servo, "belt_stretch": belt, "encoder_quantisation": self.quantisation,
+                "belt_stretch_inertia": belt - belt_load, "belt_stretch_forces": belt_load}
+
+    def summary(self) -> dict:
+        mm = 1e3
+        c = self.contributions()
+        axis = self.loop.axis
+        return {
+            "spm": self.spm,
+            "label": self.label,
+            "handover_error_mm": self.handover_error * mm,
+            "contributions_mm": {k: abs(c[k]) * mm for k in CONTRIBUTIONS},
+            "signed_contributions_mm": {k: v * mm for k, v in c.items()},
+            "handover_window_deg": self.loop.settings.handover_window,
+            "handover_angle_deg": 360.0 * (self.handover_time - self.loop.settings.sum_small_time_constants) / self.period,
+            "pulley_error_at_handover_deg": math.degrees(abs(c["servo_tracking"]) / axis.radius),
+            "max_error_mm": float(np.max(np.abs(self.error))) * mm,
+            "max_servo_error_mm": float(np.max(np.abs(self.servo))) * mm,
+            "max_belt_stretch_mm": float(np.max(np.abs(self.belt))) * mm,
+            "residual_vibration_mm": self.residual_vibration * mm,
+            "peak_torque_command_N_m": self.peak_torque_command,
+            "torque_limit_N_m": self.torque_limit,
+            "torque_limited": self.torque_limited,
+            "motor": axis.motor,
+            "pulley_pitch_diameter_mm": 2 * axis.radius * mm,
+            "moving_mass_kg": axis.mass,
+            "belt_stiffness_N_per_mm": axis.belt_stiffness * 1e-3,
+            "belt_stiffness_source": axis.belt_note,
+            "belt_resonance_Hz": axis.resonance_hz,
+            "encoder_count_at_bar_um": self.quantisation * 1e6,
+            "loop_delay_us": self.loop.settings.sum_small_time_constants * 1e6,
+            "velocity_feedforward": self.loop.settings.velocity_feedforward,
+            "acceleration_feedforward": self.loop.settings.acceleration_feedforward,
+            "gains": self.loop.gains.as_dict(),
+        }
+
+
+#: Table phases tried (fractions of the table interval); the result is the worst of them.
+TABLE_PHASES = (0.0, 0.25, 0.5, 0.75)
+
+
+def _handover(problem, spm: float) -> tuple[float, tuple[float, float]]:
+    """End time of the handover move and the dwell after it (the residual-vibration window)."""
+    timing = problem.timing
+    sch = timing.schedule(spm)
+    move = timing.handover_move
+    if move is None:
+        move = timing.moves[0]
+    k = move.index - 1
+    t_end = float(sch.t_start[k] + sch.duration[k])
+    nxt = (k + 1) % len(timing.intervals)
+    if timing.intervals[nxt].is_move:
+        return t_end, (t_end, t_end)
+    return t_end, (t_end, t_end + float(sch.duration[nxt]))
+
+
+def handover_accuracy(problem, stroke=None, spm: float | None = None, *, settings: ServoSettings | None = None,
+                      axis: DriveAxis | None = None, gains: Gains | None = None, label: str = "") -> AccuracyResult:
+    """Predict how far the bar is from its commanded position over one cycle and at the handover.
+
+    ``stroke`` defaults to the problem's classic-law stroke at ``spm`` (default
+    the problem's). Raises :class:`ProblemError` when the sampling is as long
+    as a move, :class:`SolverError` when the loop is unstable.
+    """
+    spm = problem.spm if spm is None else float(spm)
+    settings = settings_of(problem, settings)
+    check_sampling(settings.position_sampling, settings.control_cycle, problem.timing, spm,
+                   (str(problem.file), "servo.position_sampling_us", "servo.control_cycle_us"))
+    axis = axis or axis_from_problem(problem, settings)
+    loop = build_loop(axis, settings, gains)
+    stroke = stroke if stroke is not None else problem.stroke(spm)
+    t = cycle_grid(stroke.period, settings)
+    inputs = []
+    for phase in TABLE_PHASES:
+        u = reference_signals(loop, stroke, t, phase=phase)
+        # superposition: the external forces alone (and their share of the feed-forward) give their part
+        inputs += [u, u - reference_signals(loop, stroke, t, forces=False, load_ff=False, phase=phase)]
+    outputs = periodic_response(loop.system, t, *inputs)
+    delay = settings.sum_small_time_constants
+    s_cmd = stroke.evaluate(t - delay).s
+    t_h, window = _handover(problem, spm)
+    t_h, window = t_h + delay, (window[0] + delay, window[1] + delay)
+    quant = 2 * math.pi * axis.radius / settings.encoder_counts
+    results = []
+    for i in range(len(TABLE_PHASES)):
+        theta, stretch, x, tau_cmd = outputs[2 * i]
+        results.append(AccuracyResult(spm, stroke.period, t, s_cmd, x, s_cmd - axis.radius * theta, stretch,
+                                      outputs[2 * i + 1][1], tau_cmd, t_h, int(np.searchsorted(t, t_h)), quant,
+                                      axis.torque_limit, loop, label or stroke.label, window,
+                                      -outputs[2 * i + 1][2]))
+    return max(results, key=lambda r: r.handover_error)
+
+
+def residual_vibration_table(problem, spm: float | None = None, strokes=(), *,
+                             settings: ServoSettings | None = None, axis: DriveAxis | None = None,
+                             gains: Gains | None = None, progress=None) -> list[dict]:
+    """Handover error and residual belt vibration of every classic law on the problem's drive
+    (and of any extra ``strokes``: ``(label, StrokeFunction)`` pairs, e.g. an optimal design)."""
+    from ..motion.laws import LAW_NAMES, make_law
+
+    spm = problem.spm if spm is None else float(spm)
+    settings = settings_of(problem, settings)
+    axis = axis or axis_from_problem(problem, settings)
+    gains = gains or tuned_gains(axis, settings)
+    cases = []
+    for name in LAW_NAMES:
+        law = problem.default_law if name == problem.default_law.name else make_law(name)
+        cases.append((law.label, lambda law=law: problem.with_law(law).stroke(spm)))
+    cases += [(label, lambda st=st: st) for label, st in strokes]
+    rows = []
+    for label, make in (progress(cases) if progress else cases):
+        res = handover_accuracy(problem, make(), spm, settings=settings, axis=axis, gains=gains, label=label)
+        rows.append({"law": label, "handover_error_mm": res.handover_error * 1e3,
+                     "residual_vibration_mm": res.residual_vibration * 1e3,
+                     "max_error_mm": float(np.max(np.abs(res.error))) * 1e3,
+                     "max_belt_stretch_mm": float(np.max(np.abs(res.belt))) * 1e3,
+                     "peak_torque_command_N_m": res.peak_torque_command, "torque_limited": res.torque_limited})
+    return rows
+
+
+# --------------------------------------------------------------------------- the report of strokeopt accuracy
+
+
+#: What the torque of ``accuracy`` and ``tradeoff`` is, and why it differs from ``size``'s (one line of their
+#: text and the ``torque_basis`` of their JSON).
+TORQUE_BASIS = ("torque = the servo's torque command (rigid load + loop dynamics + feed-forward), not the rigid-load "
+                "peak of the commanded stroke that 'strokeopt size' checks, so the two differ near the limit")
+
+
+def accuracy_report(problem, spm: float | None = None, *, stroke=None, label: str = "", compare_laws: bool = False,
+                    extra_strokes=(), progress=None) -> tuple[dict, AccuracyResult]:
+    """The report of ``strokeopt accuracy``: the prediction for ``stroke`` (default: the problem's
+    own law; ``label`` names it) and, with ``compare_laws``, the handover error and residual
+    vibration of every classic law (plus ``extra_strokes``: ``(label, StrokeFunction)`` pairs).
+    ``progress`` wraps an iterable (tqdm)."""
+    spm = problem.spm if spm is None else float(spm)
+    settings = settings_of(problem)
+    axis = axis_from_problem(problem, settings)
+    gains = tuned_gains(axis, settings)
+    result = handover_accuracy(problem, stroke, spm=spm, settings=settings, axis=axis, gains=gains, label=label)
+    design = getattr(problem, "design", None)
+    requirement = design.accuracy if design is not None else 0.5e-3  # digest A.1: within 0.5 mm
+    report = {"problem": problem.name, **result.summary(), "requirement_mm": requirement * 1e3,
+              "torque_basis": TORQUE_BASIS,
+              "margins": loop_margins(axis, settings, gains)}
+    if compare_laws:
+        report["laws"] = residual_vibration_table(problem, spm, extra_strokes, settings=settings, axis=axis,
+                                                  gains=gains, progress=progress)
+    return report, result
