@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     from .contact.model import Model
     from .contact.scene import Scene
     from .design.solve import DesignSettings
-    from .drive.sizing import DriveSpec
+    from .drive.spec import DriveSpec
     from .servo.loop import ServoSettings
 
 

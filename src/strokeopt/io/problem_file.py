@@ -14,7 +14,7 @@ from pathlib import Path
 from ..contact.model import parse_model
 from ..contact.scene import parse_scenes
 from ..design.solve import parse_design
-from ..drive.sizing import parse_drive
+from ..drive.spec import parse_drive
 from ..drive.transmission import BeltPulley, gt3_pitch_diameter
 from ..errors import ProblemError
 from ..motion.laws import LAW_NAMES, LAW_PARAMETERS, MotionLaw, make_law
