@@ -437,7 +437,8 @@ class _DriveSetup:
     def pulley(self, teeth: int):
         found = self.catalogue.pulleys_of(self.profile, teeth, teeth)
         if not found:
-            from ..drive.catalogue import Pulley, pitch_diameter
+            from ..drive.catalogue import Pulley
+            from ..drive.transmission import pitch_diameter
 
             pd = pitch_diameter(self.profile, teeth)
             return Pulley(f"{self.profile}-{teeth}", self.profile, teeth, pd,
@@ -459,7 +460,7 @@ class _DriveSetup:
         return self.catalogue.motor(self.spec.motor, (self.file, "drive.motor"))
 
     def radius_bounds(self) -> tuple[float, float]:
-        from ..drive.catalogue import pitch_diameter
+        from ..drive.transmission import pitch_diameter
 
         return pitch_diameter(self.profile, self.teeth_range[0]) / 2, pitch_diameter(self.profile, self.teeth_range[1]) / 2
 
@@ -1736,7 +1737,7 @@ def _choose_parts(problem, spm, settings, mesh, objective, warm, drive: _DriveSe
 
 def _nearest_teeth(problem, spm, settings, mesh, objective, drive, motor, options, cont: _Outcome):
     """Re-solve with the tooth counts either side of the continuous optimum; keep the better."""
-    from ..drive.catalogue import PROFILE_PITCH
+    from ..drive.transmission import PROFILE_PITCH
 
     z = 2 * math.pi * cont.radius / PROFILE_PITCH[drive.profile]
     available = [p.teeth for p in drive.catalogue.pulleys_of(drive.profile, *drive.teeth_range)]

@@ -22,7 +22,7 @@ from ..errors import ProblemError, SolverError
 from ..motion.stroke import Kinematics
 from .checks import BeltSpec, Check, DriveLimits, binding_check, build_checks, cycle_values
 from .load import Load, TorqueTerms, load_torque, reflected_inertia, rotor_inertia_of
-from .transmission import BeltPulley
+from .transmission import PROFILE_PITCH, BeltPulley
 
 
 @dataclass
@@ -262,7 +262,7 @@ class RadiusOptimum:
                 "pulley_inertia_kg_cm2": self.pulley_inertia * 1e4}
 
 
-def optimal_radius(motor, load: Load, kin, pulley_inertia=None, bounds=(2e-3, 0.2), pitch: float = 3e-3,
+def optimal_radius(motor, load: Load, kin, pulley_inertia=None, bounds=(2e-3, 0.2), pitch: float = PROFILE_PITCH["GT3"],
                    solver_options: dict | None = None) -> RadiusOptimum:
     """Pulley pitch radius minimising the peak motor torque of a belt drive over the sampled cycle.
 

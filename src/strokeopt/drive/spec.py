@@ -12,9 +12,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import ProblemError
-from .catalogue import BELT_CORDS, PROFILE_PITCH, load_catalogue
+from .catalogue import BELT_CORDS, load_catalogue
 from .checks import BeltSpec, DriveLimits
 from .load import G, Load, LoadForce
+from .transmission import PROFILE_PITCH
 
 
 @dataclass(frozen=True)

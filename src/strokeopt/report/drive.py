@@ -48,19 +48,19 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
         lines.append(f"\nmax spm: bisection per pair to {sizing.max_spm_resolution:g} spm (rounded down); "
                      "'limited by' is the check that fails just above it")
     if explain:
-        rows = []
-        for c in sizing.candidates:
-            rows.append({"motor": c.motor.name, "z": c.pulley.teeth, "angle": c.peak_angle_deg,
-                         **{k: v for k, v in c.peak_terms.items()}})
+        rows = [{"motor": c.motor.name, "z": c.pulley.teeth, "angle": c.peak_angle_deg, **c.peak_terms}
+                for c in sizing.candidates]
         keys = [k for k in rows[0] if k not in ("motor", "z", "angle")]
         lines.append("\nmotor torque at the instant of the peak, by term [N m] (they add up to the total):")
-        lines.append(format_table(rows, [("motor", "motor"), ("z", "z"), ("angle", "cam deg")] + [(k, k) for k in keys]))
+        lines.append(format_table(rows, [("motor", "motor"), ("z", "z"), ("angle", "cam deg")]
+                                  + [(k, k) for k in keys]))
         best = sizing.candidates[0]
         lines.append(f"\nchecks of {best.motor.name} with z{best.pulley.teeth}:")
         lines.append(format_table([c.as_dict() for c in best.checks], [("name", "check"), ("value", "value"),
                                   ("limit", "limit"), ("unit", "unit"), ("margin", "margin"), ("ok", "ok")]))
     if "continuous_radius" in report:
-        lines.append("\ncontinuous pulley radius minimising the peak torque (pulley inertia from the catalogue's model):")
+        lines.append("\ncontinuous pulley radius minimising the peak torque "
+                     "(pulley inertia from the catalogue's model):")
         lines.append(format_table(report["continuous_radius"], [
             ("motor", "motor"), ("pitch_radius_mm", "radius mm"), ("pitch_diameter_mm", "PD mm"),
             ("teeth_equivalent", "teeth (not rounded)"), ("peak_torque_N_m", "peak N m")]))
