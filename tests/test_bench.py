@@ -20,7 +20,7 @@ def test_registry_and_duplicate_names():
 
 
 def test_loop_reference_agrees_with_the_vectorised_sizing(reference):
-    from strokeopt.drive.sizing import _candidates
+    from strokeopt.drive.sizing import candidates
 
     spec = reference.drive
     cat = spec.catalogue()
@@ -29,7 +29,7 @@ def test_loop_reference_agrees_with_the_vectorised_sizing(reference):
     kin = stroke.sample(301)
     belt = spec.belt_spec(cat)
     loop = size_pairs_loop(kin, motors, pulleys, spec.load, spec.limits, belt, 600, stroke.period)
-    vec = _candidates(kin, motors, pulleys, spec.load, spec.limits, belt, 600, stroke.period)
+    vec = candidates(kin, motors, pulleys, spec.load, spec.limits, belt, 600, stroke.period)
     assert len(loop) == len(vec) == 4
     for checks, cand in zip(loop, vec):
         assert [c.name for c in checks] == [c.name for c in cand.checks]

@@ -11,7 +11,7 @@ import pytest
 from strokeopt import ProblemError, SolverError, load_problem
 from strokeopt.design.collocation import Mesh, MoveSolution
 from strokeopt.design.solve import DesignSettings, _term_name, compare_with_laws, fastest_feasible, read_design, solve_design, sweep_design
-from strokeopt.drive.sizing import drive_checks
+from strokeopt.drive.checks import drive_checks
 
 ROOT = Path(__file__).resolve().parents[1]
 KNOWN = ROOT / "problems" / "known_optima"

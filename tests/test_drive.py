@@ -10,7 +10,8 @@ import pytest
 
 from strokeopt import Check, DriveLimits, Load, LoadForce, ProblemError, SliderCrank, load_problem, load_torque
 from strokeopt.drive.catalogue import load_catalogue
-from strokeopt.drive.sizing import BeltSpec, belt_load, binding_check, drive_checks, max_spm, optimal_radius, scale_kinematics, size_drive
+from strokeopt.drive.checks import BeltSpec, belt_load, binding_check, drive_checks
+from strokeopt.drive.sizing import max_spm, optimal_radius, scale_kinematics, size_drive
 
 
 @pytest.fixture(scope="module")

@@ -20,6 +20,24 @@ def test_gt3_pitch_diameters():
         assert gt3_pitch_diameter(z) * 1e3 == pytest.approx(pd, abs=0.005)
 
 
+def test_one_pulley_concept_problem_catalogue_and_toothed(reference):
+    """The problem's transmission, a catalogue pulley's and BeltPulley.toothed are the same pulley."""
+    from strokeopt.drive.catalogue import load_catalogue
+
+    tr = reference.transmission
+    assert (tr.teeth, tr.profile, reference.pulley_teeth) == (28, "GT3", 28)
+    assert tr.pitch_diameter == gt3_pitch_diameter(28) and tr.inertia == 0.0  # the ideal drive: no pulley inertia
+    cat = load_catalogue()
+    from_cat = cat.pulleys["GT3-28"].transmission()
+    assert (from_cat.teeth, from_cat.profile) == (28, "GT3")
+    assert from_cat.pitch_diameter == tr.pitch_diameter == cat.pulleys["GT3-28"].pitch_diameter
+    assert from_cat.inertia == cat.pulleys["GT3-28"].inertia > 0
+    z36 = BeltPulley.toothed(36, inertia=from_cat.inertia)
+    assert (z36.teeth, z36.profile, z36.inertia) == (36, "GT3", from_cat.inertia)
+    assert z36.pitch_diameter == cat.pulleys["GT3-36"].pitch_diameter
+    assert BeltPulley(0.02).teeth is None
+
+
 def test_belt_fast_path_equals_the_ad_transfer_functions():
     belt = BeltPulley(0.02674, inertia=1.6e-6)
     fast = belt.transfer(PHI)

@@ -28,7 +28,10 @@ exported here.
 """
 
 from .drive.catalogue import Belt, Catalogue, Pulley, ServoMotor, load_catalogue
-from .drive.sizing import Check, DriveLimits, DriveSpec, Load, LoadForce, drive_checks, load_torque, optimal_radius, size_drive
+from .drive.checks import Check, DriveLimits, drive_checks
+from .drive.load import Load, LoadForce, load_torque
+from .drive.sizing import optimal_radius, size_drive
+from .drive.spec import DriveSpec
 from .design.collocation import Mesh
 from .design.solve import OBJECTIVES, Design, DesignSettings, compare_with_laws, design_text, mesh_study, read_design, solve_design, sweep_design
 from .errors import ProblemError, SolverError, StrokeoptError

@@ -128,7 +128,8 @@ def cmd_kinematics(args) -> int:
 
 def cmd_size(args) -> int:
     from .drive.sizing import optimal_radius, size_drive
-    from .report.format import format_table, to_json
+    from .report.drive import plot_sizing, sizing_text
+    from .report.format import to_json
 
     problem = _load(args)
     if problem.drive is None:
@@ -146,57 +147,13 @@ def cmd_size(args) -> int:
         spec = problem.drive
         model = lambda d: catalogue.pulley_inertia(spec.profile, d)  # noqa: E731
         motors = {c.motor.name: c.motor for c in sizing.candidates}
-        report["continuous_radius"] = []
-        for m in motors.values():
-            opt = optimal_radius(m, spec.load, sizing.kinematics, model)
-            report["continuous_radius"].append({
-                "motor": m.name, "pitch_radius_mm": opt.radius * 1e3, "pitch_diameter_mm": 2e3 * opt.radius,
-                "teeth_equivalent": opt.teeth_equivalent, "peak_torque_N_m": opt.peak_torque,
-                "pulley_inertia_kg_cm2": opt.pulley_inertia * 1e4})
+        report["continuous_radius"] = [optimal_radius(m, spec.load, sizing.kinematics, model).row()
+                                       for m in motors.values()]
     if args.json:
         _emit(to_json(report))
     else:
-        inp = report["inputs"]
-        forces = "; ".join(f"{f['name']} ({f['kind']}, {f['force_N']:g} N + {f['stiffness_N_m']:g} N/m "
-                           f"beyond {f['contact_position_mm']:g} mm, pushing {f['direction']})"
-                           for f in inp["load_forces"]) or "none"
-        print(f"{report['problem']} at {report['spm']:g} spm (cycle {report['cycle_time_s'] * 1e3:.1f} ms, "
-              f"{inp['law']}, {inp['samples']} samples over the whole cycle)")
-        print(f"load: moving mass {inp['moving_mass_kg']:g} kg, gravity {inp['gravity_m_s2']:g} m/s^2 along the "
-              f"axis, load forces: {forces}")
-        print(f"limits: drive peak {inp['peak_limit_pct']:g} % of rated torque, inertia ratio <= "
-              f"{inp['max_inertia_ratio']:g}; belt {inp['belt']} ({inp['belt_cord']} cord, service factor "
-              f"{inp['belt_service_factor']})")
-        print("ranked: feasible first, then by overload (peak / rated torque); 'binding' = the check with the "
-              "least margin\n")
-        cols = [("motor", "motor"), ("pulley_teeth", "z"), ("pulley_pitch_diameter_mm", "PD mm"),
-                ("peak_torque_N_m", "peak N m"), ("rms_torque_N_m", "RMS N m"), ("overload_pct", "overload %"),
-                ("peak_speed_rpm", "speed rpm"), ("inertia_ratio", "J ratio"), ("feasible", "feasible"),
-                ("binding", "binding"), ("margin", "margin")]
-        if args.max_spm:
-            cols += [("max_spm", "max spm"), ("max_spm_binding", "limited by")]
-        print(format_table(report["candidates"], cols))
-        if args.max_spm:
-            print(f"\nmax spm: bisection per pair to {sizing.max_spm_resolution:g} spm (rounded down); "
-                  "'limited by' is the check that fails just above it")
-        if args.explain:
-            rows = []
-            for c in sizing.candidates:
-                rows.append({"motor": c.motor.name, "z": c.pulley.teeth, "angle": c.peak_angle_deg,
-                             **{k: v for k, v in c.peak_terms.items()}})
-            keys = [k for k in rows[0] if k not in ("motor", "z", "angle")]
-            print("\nmotor torque at the instant of the peak, by term [N m] (they add up to the total):")
-            print(format_table(rows, [("motor", "motor"), ("z", "z"), ("angle", "cam deg")] + [(k, k) for k in keys]))
-            best = sizing.candidates[0]
-            print(f"\nchecks of {best.motor.name} with z{best.pulley.teeth}:")
-            print(format_table([c.as_dict() for c in best.checks], [("name", "check"), ("value", "value"),
-                               ("limit", "limit"), ("unit", "unit"), ("margin", "margin"), ("ok", "ok")]))
-        if args.continuous_radius:
-            print("\ncontinuous pulley radius minimising the peak torque (pulley inertia from the catalogue's model):")
-            print(format_table(report["continuous_radius"], [
-                ("motor", "motor"), ("pitch_radius_mm", "radius mm"), ("pitch_diameter_mm", "PD mm"),
-                ("teeth_equivalent", "teeth (not rounded)"), ("peak_torque_N_m", "peak N m")]))
-    _write_figure(lambda p: sizing.plot(p), _plot_path(args, "sizing"), args)
+        print(sizing_text(sizing, report, explain=args.explain))
+    _write_figure(lambda p: plot_sizing(sizing, None, p), _plot_path(args, "sizing"), args)
     return 0
 
 

@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     from .contact.model import Model
     from .contact.scene import Scene
     from .design.solve import DesignSettings
-    from .drive.sizing import DriveSpec
+    from .drive.spec import DriveSpec
     from .servo.settings import ServoSettings
 
 
@@ -34,14 +34,18 @@ class Problem:
     spm: float
     timing: TimingDiagram
     default_law: MotionLaw
-    pulley_teeth: int
-    transmission: BeltPulley
+    transmission: BeltPulley  # [transmission]: the toothed pulley, with its teeth (no inertia: the ideal drive)
     data: dict = field(repr=False)  # the raw data after overrides, for reporting
     model: Model | None = field(default=None, repr=False)  # [model]: the contact model (model.py)
     scenes: dict[str, Scene] | None = field(default=None, repr=False)  # [scenes.*] (scene.py)
     drive: DriveSpec | None = field(default=None, repr=False)  # [drive]: motor, load, limits (drive.py)
     design: DesignSettings | None = field(default=None, repr=False)  # [design]: optimal stroke (design.py)
     servo: "ServoSettings | None" = field(default=None, repr=False)  # [servo]: servo loop and belt (servo.py)
+
+    @property
+    def pulley_teeth(self) -> int:
+        """Tooth count of the problem's pulley (``transmission.pulley_teeth``)."""
+        return self.transmission.teeth
 
     @property
     def period(self) -> float:

@@ -13,7 +13,8 @@ def size_pairs_loop(kin, motors, pulleys, load, limits, belt, spm, period):
     sample and pair (a Python loop), the way a first script would do it."""
     import numpy as np
 
-    from ..drive.sizing import _checks, load_torque, reflected_inertia
+    from ..drive.checks import build_checks
+    from ..drive.load import load_torque, reflected_inertia
 
     out = []
     for p in pulleys:
@@ -30,8 +31,8 @@ def size_pairs_loop(kin, motors, pulleys, load, limits, belt, spm, period):
             rms = float(np.sqrt(np.sum((total[1:] ** 2 + total[:-1] ** 2) * np.diff(t)) / (2 * (t[-1] - t[0]))))
             peak = float(np.max(np.abs(total)))
             reflected = reflected_inertia(tr, load, kin.s / tr.radius)
-            out.append(_checks(peak, rms, max(map(abs, omega)), max(map(abs, force)), m, reflected, limits, belt,
-                               p.teeth))
+            out.append(build_checks(peak, rms, max(map(abs, omega)), max(map(abs, force)), m, reflected, limits,
+                                    belt, p.teeth))
     return out
 
 
@@ -40,7 +41,7 @@ def size_pairs_loop(kin, motors, pulleys, load, limits, belt, spm, period):
 def _bench_size_catalogue() -> BenchResult:
     import numpy as np
 
-    from ..drive.sizing import _candidates
+    from ..drive.sizing import candidates
 
     problem = load_problem(reference_problem_path())
     spec = problem.drive
@@ -53,7 +54,7 @@ def _bench_size_catalogue() -> BenchResult:
     def vectorised(ms, ps):
         stroke = problem.stroke(spm)
         kin = stroke.sample(samples)
-        return _candidates(kin, ms, ps, spec.load, spec.limits, belt, spm, stroke.period)
+        return candidates(kin, ms, ps, spec.load, spec.limits, belt, spm, stroke.period)
 
     vectorised(motors, pulleys)  # warm-up: CasADi builds its Functions on first use
     full = best_time(lambda: vectorised(motors, pulleys), repeat=5)

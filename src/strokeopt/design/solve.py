@@ -437,7 +437,8 @@ class _DriveSetup:
     def pulley(self, teeth: int):
         found = self.catalogue.pulleys_of(self.profile, teeth, teeth)
         if not found:
-            from ..drive.catalogue import Pulley, pitch_diameter
+            from ..drive.catalogue import Pulley
+            from ..drive.transmission import pitch_diameter
 
             pd = pitch_diameter(self.profile, teeth)
             return Pulley(f"{self.profile}-{teeth}", self.profile, teeth, pd,
@@ -459,7 +460,7 @@ class _DriveSetup:
         return self.catalogue.motor(self.spec.motor, (self.file, "drive.motor"))
 
     def radius_bounds(self) -> tuple[float, float]:
-        from ..drive.catalogue import pitch_diameter
+        from ..drive.transmission import pitch_diameter
 
         return pitch_diameter(self.profile, self.teeth_range[0]) / 2, pitch_diameter(self.profile, self.teeth_range[1]) / 2
 
@@ -476,7 +477,7 @@ class _DriveSetup:
         """The belt check that binds first: (drive.py's check name, allowable tension [N], the check's limit, unit)."""
         if self.belt is None:
             return None
-        from ..drive.sizing import belt_load
+        from ..drive.checks import belt_load
 
         grooves = teeth if teeth is not None else self.teeth_range[0]  # conservative for a continuous radius
         unit = belt_load(1.0, grooves, self.belt)  # everything is linear in the tension
@@ -490,7 +491,7 @@ class _DriveSetup:
 
     def handover_force(self) -> float:
         """|Effective belt tension| [N] at rest at the handover position (gravity and load forces)."""
-        from ..drive.sizing import load_torque
+        from ..drive.load import load_torque
 
         move = self.problem.timing.handover_move
         s = np.array([move.end_position if move is not None else 0.0])
@@ -660,7 +661,7 @@ def _pulley_setting(ctx: _Context) -> tuple[float, float, float, float]:
 
 def _add_drive(ctx: _Context) -> None:
     """Motor torque, speed, belt tension and inertia limits at every node (drive.py's load model)."""
-    from ..drive.sizing import load_torque
+    from ..drive.load import load_torque
 
     b, drive, choice, mesh = ctx.built, ctx.drive, ctx.choice, ctx.mesh
     # The pulley radius is a decision variable scaled by a reference radius: free between the
@@ -875,7 +876,7 @@ def _pins(ctx: _Context, k: int, mv: _Move, rotor, trans):
     window and the local time are parameters, so the crossing may move across the window
     between solves without a new build. A switch the move does not cross gets a zero weight.
     """
-    from ..drive.sizing import load_torque
+    from ..drive.load import load_torque
 
     b, mesh, x = ctx.built, ctx.mesh, ctx.vars[k]
     d1 = mesh.degree + 1
@@ -1449,7 +1450,7 @@ def _fine_cycle(problem, spm: float, moves: list[_Move], sols: list[MoveSolution
 def _drive_checks_fine(drive: _DriveSetup, motor, teeth: int | None, radius: float, problem, spm, moves, sols,
                        per_interval: int) -> list:
     """drive.py's checks of the solution, on a fine grid over the whole cycle."""
-    from ..drive.sizing import drive_checks
+    from ..drive.checks import drive_checks
 
     switches = [f.contact_position for f in drive.load.forces if f.kind == "spring"]
     t, s, v, a = _fine_cycle(problem, spm, moves, sols, per_interval, switches)
@@ -1736,7 +1737,7 @@ def _choose_parts(problem, spm, settings, mesh, objective, warm, drive: _DriveSe
 
 def _nearest_teeth(problem, spm, settings, mesh, objective, drive, motor, options, cont: _Outcome):
     """Re-solve with the tooth counts either side of the continuous optimum; keep the better."""
-    from ..drive.catalogue import PROFILE_PITCH
+    from ..drive.transmission import PROFILE_PITCH
 
     z = 2 * math.pi * cont.radius / PROFILE_PITCH[drive.profile]
     available = [p.teeth for p in drive.catalogue.pulleys_of(drive.profile, *drive.teeth_range)]
@@ -1900,7 +1901,8 @@ def _stroke_measures(design: "Design", stroke: StrokeFunction, samples: int = 20
         int_j2 += math.inf if math.isinf(pk.j_max) else float(np.sum(k.j**2) * dur / len(t))
     row = {"a_max_m_s2": a_max, "jerk_max_m_s3": j_max, "accel_squared": int_a2, "jerk_squared": int_j2}
     if design.motor_spec is not None and problem.drive is not None:
-        from ..drive.sizing import drive_checks, load_torque
+        from ..drive.checks import drive_checks
+        from ..drive.load import load_torque
 
         drive = _DriveSetup(problem, getattr(problem, "design", None) or DesignSettings())
         trans = drive.transmission(design.pulley_teeth) if design.pulley_teeth else \

@@ -33,7 +33,7 @@ import numpy as np
 
 from ..errors import ProblemError
 from ..io.fields import Fields, _did_you_mean
-from .transmission import BeltPulley
+from .transmission import PROFILE_PITCH, BeltPulley, pitch_diameter
 
 RPM = 2 * math.pi / 60  # rad/s per rpm
 KG_CM2 = 1e-4  # kg m^2 per kg cm^2
@@ -107,10 +107,13 @@ class PulleyInertiaModel:
 
 @dataclass(frozen=True)
 class Pulley:
-    """A toothed pulley: ``teeth`` grooves, pitch diameter [m], moment of inertia [kg m^2].
+    """A toothed pulley of the catalogue: ``teeth`` grooves, pitch diameter [m], moment of inertia [kg m^2].
 
-    ``inertia_source`` says where the inertia came from: ``"data"`` (the
-    catalogue file) or ``"model"`` (the profile's fitted inertia model).
+    A catalogue record (name, where the inertia came from); as a transmission
+    it is the :class:`~strokeopt.drive.transmission.BeltPulley` of
+    :meth:`transmission`, the same object the problem's ``[transmission]``
+    becomes. ``inertia_source`` says where the inertia came from: ``"data"``
+    (the catalogue file) or ``"model"`` (the profile's fitted inertia model).
     """
 
     name: str
@@ -125,8 +128,8 @@ class Pulley:
         return self.pitch_diameter / 2
 
     def transmission(self) -> BeltPulley:
-        """The belt transmission of this pulley, carrying its inertia."""
-        return BeltPulley(self.pitch_diameter, inertia=self.inertia)
+        """The belt transmission of this pulley, carrying its inertia, teeth and profile."""
+        return BeltPulley(self.pitch_diameter, self.inertia, self.teeth, self.profile)
 
 
 @dataclass(frozen=True)
@@ -161,14 +164,6 @@ class BeltMethod:
         """
         k = int(np.searchsorted(np.asarray(self.grooves), grooves, side="right")) - 1
         return float(self.allowable_tension[k]) if k >= 0 else 0.0
-
-
-def pitch_diameter(profile: str, teeth) -> float:
-    """Pitch diameter [m] of a pulley: ``z * pitch / pi`` (GT3: 3 mm pitch, thesis 4.2)."""
-    return teeth * PROFILE_PITCH[profile] / math.pi
-
-
-PROFILE_PITCH = {"GT3": 3e-3}
 
 
 # --------------------------------------------------------------------------- catalogue

@@ -5,6 +5,12 @@ written once with CasADi operations. Its first and second transfer functions
 ``mu = dx/dphi`` and ``nu = d2x/dphi2`` come from algorithmic differentiation,
 so a position-dependent transmission (crank, screw and lever) needs nothing
 but its position function.
+
+Where it sits: first in the drive package. The toothed-pulley geometry
+(:data:`PROFILE_PITCH`, :func:`pitch_diameter`) is here, once: the problem's
+``[transmission]`` (a :class:`BeltPulley` with its teeth), the catalogue's
+pulleys (catalogue.py) and the design's pulley search all use it. load.py
+turns a load motion into motor torque through a transmission.
 """
 
 from __future__ import annotations
@@ -80,17 +86,36 @@ class Transmission:
         return phi, omega, eps
 
 
+#: Tooth pitch [m] of each toothed-belt profile strokeopt knows.
+PROFILE_PITCH = {"GT3": 3e-3}
+
+
+def pitch_diameter(profile: str, teeth) -> float:
+    """Pitch diameter [m] of a pulley: ``z * pitch / pi`` (GT3: 3 mm pitch, thesis 4.2)."""
+    return teeth * PROFILE_PITCH[profile] / math.pi
+
+
+def gt3_pitch_diameter(teeth: int) -> float:
+    """Pitch diameter [m] of a GT3 (3 mm pitch) pulley: PD = z * 3 mm / pi (thesis 4.2)."""
+    return pitch_diameter("GT3", teeth)
+
+
 class BeltPulley(Transmission):
     """A toothed belt on a pulley of pitch radius ``r``: ``x = r*phi``; ``inertia`` of the pulley [kg m^2].
 
     ``pitch_diameter`` and ``inertia`` may be CasADi expressions (a pulley radius that is a
-    decision variable of the design NLP); numbers are checked. ``teeth`` is the catalogue
-    tooth count, or None for a pulley of any radius.
+    decision variable of the design NLP); numbers are checked. ``teeth`` and ``profile``
+    say which toothed pulley it is (:meth:`toothed`), or are None for a pulley of any radius.
     """
 
     name = "belt_pulley"
 
-    def __init__(self, pitch_diameter, inertia=0.0, teeth: int | None = None):
+    @classmethod
+    def toothed(cls, teeth: int, profile: str = "GT3", inertia=0.0) -> "BeltPulley":
+        """The pulley of ``teeth`` grooves of ``profile``: its pitch diameter from :func:`pitch_diameter`."""
+        return cls(pitch_diameter(profile, teeth), inertia, teeth, profile)
+
+    def __init__(self, pitch_diameter, inertia=0.0, teeth: int | None = None, profile: str | None = None):
         symbolic = isinstance(pitch_diameter, (ca.SX, ca.MX)) or isinstance(inertia, (ca.SX, ca.MX))
         if not symbolic:
             if not (pitch_diameter > 0 and math.isfinite(pitch_diameter)):
@@ -101,6 +126,7 @@ class BeltPulley(Transmission):
         self.pitch_diameter = pitch_diameter
         self.inertia = inertia
         self.teeth = teeth
+        self.profile = profile
 
     @property
     def radius(self):
@@ -181,7 +207,3 @@ class ScrewLever(Transmission):
         phi4 = ca.atan(x / self.R0P + math.tan(self.offset)) - self.offset
         return 2 * math.pi / self.lead * self.R0 * ca.tan(phi4)
 
-
-def gt3_pitch_diameter(teeth: int) -> float:
-    """Pitch diameter [m] of a GT3 (3 mm pitch) pulley: PD = z * 3 mm / pi (thesis 4.2)."""
-    return teeth * 3e-3 / math.pi

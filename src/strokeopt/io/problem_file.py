@@ -14,8 +14,8 @@ from pathlib import Path
 from ..contact.model import parse_model
 from ..contact.scene import parse_scenes
 from ..design.solve import parse_design
-from ..drive.sizing import parse_drive
-from ..drive.transmission import BeltPulley, gt3_pitch_diameter
+from ..drive.spec import parse_drive
+from ..drive.transmission import PROFILE_PITCH, BeltPulley
 from ..errors import ProblemError
 from ..motion.laws import LAW_NAMES, LAW_PARAMETERS, MotionLaw, make_law
 from ..motion.timing import INTERVAL_TIMES, Interval, TimingDiagram
@@ -63,7 +63,7 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
 
     trans = top.table("transmission")
     trans.string("type", "belt_pulley", choices=("belt_pulley",))
-    trans.string("profile", "GT3", choices=("GT3",))
+    profile = trans.string("profile", "GT3", choices=tuple(PROFILE_PITCH))
     teeth = trans.number("pulley_teeth", integer=True, min=1)
     trans.finish()
 
@@ -83,8 +83,7 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
         spm=spm,
         timing=timing,
         default_law=default_law,
-        pulley_teeth=teeth,
-        transmission=BeltPulley(gt3_pitch_diameter(teeth)),
+        transmission=BeltPulley.toothed(teeth, profile),
         data=data,
         model=model,
         scenes=scenes,

@@ -1,4 +1,8 @@
-"""Drive sizing: its figure (and text tables)."""
+"""Drive sizing for people: the text report and the figure of a :class:`~strokeopt.drive.sizing.Sizing`.
+
+Where it sits: after drive/sizing.py, which computes and ranks; ``strokeopt
+size`` (cli.py) prints :func:`sizing_text` and writes :func:`plot_sizing`.
+"""
 
 from __future__ import annotations
 
@@ -7,12 +11,67 @@ import math
 import matplotlib.pyplot as plt
 import numpy as np
 
+from .format import format_table
+
+
+def sizing_text(sizing, report: dict, explain: bool = False) -> str:
+    """The text report of ``strokeopt size``: inputs, the ranked table, and on request the
+    highest stitch rates, the torque breakdown at the peak and the continuous radius.
+
+    ``report`` is ``sizing.to_dict(explain)``, with a ``"continuous_radius"`` list of
+    :meth:`~strokeopt.drive.sizing.RadiusOptimum.row` when that was asked for.
+    """
+    with_max_spm = sizing.max_spm_resolution is not None
+    inp = report["inputs"]
+    forces = "; ".join(f"{f['name']} ({f['kind']}, {f['force_N']:g} N + {f['stiffness_N_m']:g} N/m "
+                       f"beyond {f['contact_position_mm']:g} mm, pushing {f['direction']})"
+                       for f in inp["load_forces"]) or "none"
+    lines = [
+        f"{report['problem']} at {report['spm']:g} spm (cycle {report['cycle_time_s'] * 1e3:.1f} ms, "
+        f"{inp['law']}, {inp['samples']} samples over the whole cycle)",
+        f"load: moving mass {inp['moving_mass_kg']:g} kg, gravity {inp['gravity_m_s2']:g} m/s^2 along the "
+        f"axis, load forces: {forces}",
+        f"limits: drive peak {inp['peak_limit_pct']:g} % of rated torque, inertia ratio <= "
+        f"{inp['max_inertia_ratio']:g}; belt {inp['belt']} ({inp['belt_cord']} cord, service factor "
+        f"{inp['belt_service_factor']})",
+        "ranked: feasible first, then by overload (peak / rated torque); 'binding' = the check with the "
+        "least margin\n",
+    ]
+    cols = [("motor", "motor"), ("pulley_teeth", "z"), ("pulley_pitch_diameter_mm", "PD mm"),
+            ("peak_torque_N_m", "peak N m"), ("rms_torque_N_m", "RMS N m"), ("overload_pct", "overload %"),
+            ("peak_speed_rpm", "speed rpm"), ("inertia_ratio", "J ratio"), ("feasible", "feasible"),
+            ("binding", "binding"), ("margin", "margin")]
+    if with_max_spm:
+        cols += [("max_spm", "max spm"), ("max_spm_binding", "limited by")]
+    lines.append(format_table(report["candidates"], cols))
+    if with_max_spm:
+        lines.append(f"\nmax spm: bisection per pair to {sizing.max_spm_resolution:g} spm (rounded down); "
+                     "'limited by' is the check that fails just above it")
+    if explain:
+        rows = [{"motor": c.motor.name, "z": c.pulley.teeth, "angle": c.peak_angle_deg, **c.peak_terms}
+                for c in sizing.candidates]
+        keys = [k for k in rows[0] if k not in ("motor", "z", "angle")]
+        lines.append("\nmotor torque at the instant of the peak, by term [N m] (they add up to the total):")
+        lines.append(format_table(rows, [("motor", "motor"), ("z", "z"), ("angle", "cam deg")]
+                                  + [(k, k) for k in keys]))
+        best = sizing.candidates[0]
+        lines.append(f"\nchecks of {best.motor.name} with z{best.pulley.teeth}:")
+        lines.append(format_table([c.as_dict() for c in best.checks], [("name", "check"), ("value", "value"),
+                                  ("limit", "limit"), ("unit", "unit"), ("margin", "margin"), ("ok", "ok")]))
+    if "continuous_radius" in report:
+        lines.append("\ncontinuous pulley radius minimising the peak torque "
+                     "(pulley inertia from the catalogue's model):")
+        lines.append(format_table(report["continuous_radius"], [
+            ("motor", "motor"), ("pitch_radius_mm", "radius mm"), ("pitch_diameter_mm", "PD mm"),
+            ("teeth_equivalent", "teeth (not rounded)"), ("peak_torque_N_m", "peak N m")]))
+    return "\n".join(lines)
+
 
 def plot_sizing(sizing, candidate=None, path=None):
     """The classic sizing picture for ``candidate`` (default: the best ranked):
     the cycle's torque-speed trajectory over the motor's continuous and peak
     envelopes and the drive's peak limit, and the torque terms over the cam angle.
-    ``sizing`` is a :class:`strokeopt.drive.Sizing`."""
+    ``sizing`` is a :class:`~strokeopt.drive.sizing.Sizing`."""
     c = candidate or sizing.candidates[0]
     terms = sizing.torque_curve(c)
     rpm = 60 / (2 * math.pi)

@@ -1,0 +1,164 @@
+"""The sizing checks of a drive over one sampled cycle.
+
+Where it sits: after load.py (the motor torque over the cycle), before
+sizing.py (every catalogue motor with every pulley). A :class:`Check` is one
+limit and the value that must stay under it; :func:`drive_checks` runs them
+all for one motor and transmission::
+
+    checks = drive_checks(motor, transmission, load, t, s, v, a,
+                          limits=DriveLimits(peak_limit_pct=300), belt=belt_spec, grooves=28)
+    for c in checks: c.name, c.value, c.limit, c.unit, c.margin, c.ok
+
+The belt checks follow the catalogue method of thesis appendix 2
+(:func:`belt_load`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ProblemError
+from .load import Load, load_torque, reflected_inertia
+
+CHECK_NAMES = ("peak_torque", "overload", "rms_torque", "peak_speed", "inertia_ratio", "belt_width", "belt_breaking")
+
+
+@dataclass(frozen=True)
+class Check:
+    """One sizing check: ``value`` must not exceed ``limit`` (both in ``unit``).
+
+    ``margin = 1 - value/limit``: the fraction of the limit still free
+    (negative when violated).
+    """
+
+    name: str
+    value: float
+    limit: float
+    unit: str
+
+    @property
+    def margin(self) -> float:
+        if self.limit > 0:
+            return 1.0 - self.value / self.limit
+        return -math.inf if self.value > 0 else 0.0
+
+    @property
+    def ok(self) -> bool:
+        return bool(self.value <= self.limit)
+
+    def as_dict(self) -> dict:
+        return {"name": self.name, "value": self.value, "limit": self.limit, "unit": self.unit,
+                "margin": self.margin, "ok": self.ok}
+
+
+@dataclass(frozen=True)
+class DriveLimits:
+    """Limits that belong to the application, not to a part.
+
+    ``peak_limit_pct``: the servo drive's peak current as % of the motor's
+    rated torque (Digitax ST: 300 %, thesis 4.6). ``max_inertia_ratio``:
+    largest load-to-rotor inertia ratio accepted (a common servo guideline,
+    not from the thesis).
+    """
+
+    peak_limit_pct: float = 300.0
+    max_inertia_ratio: float = 10.0
+
+
+@dataclass(frozen=True)
+class BeltSpec:
+    """The belt of the drive and how it is checked (thesis appendix 2).
+
+    ``allowable_tension`` [N per reference width], when given, replaces the
+    catalogue row for the pulley's groove count.
+    """
+
+    belt: object  # catalogue.Belt
+    method: object  # catalogue.BeltMethod
+    service_factor: float = 1.5
+    cord: str = "glass"
+    allowable_tension: float | None = None
+
+
+@dataclass(frozen=True)
+class BeltLoad:
+    """The numbers of the belt check (thesis appendix 2)."""
+
+    peak_tension: float  # T_e [N]
+    design_tension: float  # S * T_e [N]
+    allowable_tension: float  # per reference width [N]
+    required_width_factor: float
+    breaking_load: float  # peak_tension_factor * T_e * safety [N]
+
+
+def belt_load(peak_tension, grooves: int, spec: BeltSpec) -> BeltLoad:
+    """Apply the catalogue method of thesis appendix 2 to a peak belt tension ``T_e`` [N]."""
+    allow = spec.allowable_tension if spec.allowable_tension is not None else spec.method.allowable_tension_for(grooves)
+    design = spec.service_factor * peak_tension
+    required = design / allow if allow > 0 else math.inf
+    breaking = spec.method.peak_tension_factor * peak_tension * spec.method.breaking_safety
+    return BeltLoad(peak_tension, design, allow, required, breaking)
+
+
+def cycle_values(total, omega, load_force, t):
+    """Peak |torque|, RMS torque over the whole cycle (trapezoidal in time), peak |speed|, peak |force|.
+
+    ``total`` may carry leading axes (motors); the last axis is the samples.
+    """
+    period = t[-1] - t[0]
+    if not period > 0:
+        raise ValueError("the samples must span one whole cycle (t[-1] > t[0])")
+    peak = np.max(np.abs(total), axis=-1)
+    sq = total**2
+    rms = np.sqrt(np.sum((sq[..., 1:] + sq[..., :-1]) * np.diff(t), axis=-1) / (2 * period))
+    return peak, rms, float(np.max(np.abs(omega))), float(np.max(np.abs(load_force)))
+
+
+def build_checks(peak, rms, peak_speed, peak_force, motor, reflected, limits: DriveLimits,
+                 belt: BeltSpec | None, grooves: int | None) -> list[Check]:
+    """The checks of ``motor`` from the values of one cycle (:func:`cycle_values`) and the
+    reflected inertia: peak torque, overload, RMS torque, peak speed, inertia ratio and,
+    with ``belt``, the belt width and breaking checks (``grooves`` of the pulley)."""
+    rpm = 60 / (2 * math.pi)
+    out = [
+        Check("peak_torque", float(peak), motor.peak_torque, "N m"),
+        Check("overload", float(100 * peak / motor.rated_torque), limits.peak_limit_pct, "%"),
+        Check("rms_torque", float(rms), motor.rated_torque, "N m"),
+        Check("peak_speed", peak_speed * rpm, motor.rated_speed * rpm, "rpm"),
+        Check("inertia_ratio", reflected / motor.rotor_inertia, limits.max_inertia_ratio, "-"),
+    ]
+    if belt is not None:
+        if grooves is None:
+            raise ValueError("the belt checks need the groove count of the pulley")
+        bl = belt_load(peak_force, grooves, belt)
+        if belt.cord not in belt.belt.breaking_tension:
+            raise ProblemError("catalogue", f"belt {belt.belt.name}", f"has no breaking tension for {belt.cord} cord")
+        out += [Check("belt_width", bl.required_width_factor, belt.belt.width_factor, "-"),
+                Check("belt_breaking", bl.breaking_load, belt.belt.breaking_tension[belt.cord], "N")]
+    return out
+
+
+def drive_checks(motor, transmission, load: Load, t, s, v, a, *, limits: DriveLimits | None = None,
+                 belt: BeltSpec | None = None, grooves: int | None = None) -> list[Check]:
+    """The sizing checks of one motor and transmission over a sampled cycle.
+
+    ``t`` must run over one whole cycle (0 to the period, both ends included,
+    dwells too): the RMS torque is the time average over it. Checks:
+    peak torque vs the motor's peak torque, overload (peak / rated) vs the
+    drive's peak limit, RMS torque vs rated torque, peak speed vs rated speed,
+    load-to-rotor inertia ratio, and with ``belt`` the belt width and
+    breaking checks of thesis appendix 2 (``grooves`` of the smaller pulley).
+    """
+    t, s, v, a = (np.asarray(x, dtype=float) for x in (t, s, v, a))
+    terms = load_torque(motor, transmission, load, s, v, a)
+    peak, rms, peak_speed, peak_force = cycle_values(terms.total, terms.omega, terms.load_force, t)
+    reflected = reflected_inertia(transmission, load, terms.phi)
+    return build_checks(peak, rms, peak_speed, peak_force, motor, reflected, limits or DriveLimits(), belt, grooves)
+
+
+def binding_check(checks: list[Check]) -> Check:
+    """The check with the smallest margin: the one that binds first."""
+    return min(checks, key=lambda c: c.margin)

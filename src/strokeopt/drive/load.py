@@ -1,0 +1,151 @@
+"""The load a drive moves, and the motor torque and speed it asks for over a motion.
+
+Where it sits: ``motion`` gives the load motion ``s, v, a``; a transmission
+(transmission.py) maps it to the motor shaft; this module adds the load
+(moving mass, gravity, load forces) and returns the motor torque and its
+breakdown (:class:`TorqueTerms`). checks.py and sizing.py evaluate it over a
+cycle; the design writes its collocation constraints with the same function.
+
+    # numeric: s, v, a are numpy arrays of the load (bar) motion over one whole cycle
+    terms = load_torque(motor, transmission, load, s, v, a)
+    terms.total            # motor torque [N m], same shape as s
+    terms.omega            # motor speed [rad/s]
+    terms.as_dict()        # the breakdown: rotor inertia, transmission inertia, moving mass,
+                           # gravity, each load force (they add up to ``total``)
+
+    # symbolic: the SAME function on CasADi SX/MX (collocation constraints)
+    terms = load_torque(motor, transmission, load, s_sym, v_sym, a_sym)
+    opti.subject_to(-motor.peak_torque <= terms.total)   # etc.
+
+``motor`` is a :class:`~strokeopt.drive.catalogue.ServoMotor` (or just its rotor
+inertia in kg m^2); ``transmission`` any :class:`~strokeopt.drive.transmission.Transmission`
+(a :class:`~strokeopt.drive.transmission.BeltPulley` carries its pulley's inertia);
+``load`` a :class:`Load` (moving mass, gravity along the axis, load forces).
+
+The model (rigid, one degree of freedom): with the load at ``x = f(phi)``,
+``mu = dx/dphi``, ``nu = d2x/dphi2`` (AD, transmission.py) the force the
+transmission applies to the load is ``F = m (a - g) - sum(F_load)`` and the
+motor torque ``T = (J_rotor + J_transmission) eps + mu F``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+G = 9.81  # m/s^2, as the thesis uses (appendix 2)
+
+
+def _symbolic(*xs) -> bool:
+    return any(isinstance(x, (ca.SX, ca.MX)) for x in xs)
+
+
+def _where(cond, a, b):
+    """``a`` where ``cond`` else ``b``: numpy for numbers and arrays, ``if_else`` for CasADi symbols."""
+    if _symbolic(cond, a, b):
+        return ca.if_else(cond, a, b)
+    return np.where(cond, a, b)
+
+
+@dataclass(frozen=True)
+class LoadForce:
+    """A force on the load along its axis [N], as a function of the load position.
+
+    ``kind = "constant"``: ``direction * force`` everywhere.
+    ``kind = "spring"``: a compression spring met at ``contact_position`` [m]:
+    beyond it (against ``direction``) it pushes with ``force`` (its preload)
+    plus ``stiffness`` times the penetration; before it, nothing.
+    ``direction`` is +1 (pushes towards +x) or -1.
+    """
+
+    name: str
+    kind: str
+    direction: float
+    force: float
+    stiffness: float = 0.0
+    contact_position: float = 0.0
+
+    def __call__(self, s):
+        if self.kind == "constant":
+            return self.direction * self.force + 0 * s
+        penetration = self.direction * (self.contact_position - s)
+        return _where(penetration > 0, self.direction * (self.force + self.stiffness * penetration), 0 * s)
+
+
+@dataclass(frozen=True)
+class Load:
+    """What the drive moves: a translating ``moving_mass`` [kg] (bar, carrier, belt),
+    ``gravity`` [m/s^2] along the load axis (-9.81 for an axis pointing up), load forces."""
+
+    moving_mass: float
+    gravity: float = 0.0
+    forces: tuple[LoadForce, ...] = ()
+
+
+@dataclass(frozen=True)
+class TorqueTerms:
+    """Motor torque [N m] and its breakdown; numpy arrays or CasADi expressions.
+
+    ``total = rotor_inertia + transmission_inertia + moving_mass + gravity + sum(forces)``.
+    ``load_force`` is the force the transmission applies to the load [N] (the belt's
+    effective tension for a belt drive).
+    """
+
+    phi: object
+    omega: object
+    eps: object
+    rotor_inertia: object
+    transmission_inertia: object
+    moving_mass: object
+    gravity: object
+    forces: dict
+    load_force: object
+    total: object
+
+    def as_dict(self) -> dict:
+        """The torque terms by name, in the order they add up to ``total``."""
+        out = {"rotor_inertia": self.rotor_inertia, "transmission_inertia": self.transmission_inertia,
+               "moving_mass": self.moving_mass, "gravity": self.gravity}
+        out.update({f"force: {k}": v for k, v in self.forces.items()})
+        return out
+
+
+def rotor_inertia_of(motor):
+    """The rotor inertia [kg m^2] of ``motor``: a ServoMotor's, or ``motor`` itself when it is a number."""
+    return getattr(motor, "rotor_inertia", motor)
+
+
+def load_torque(motor, transmission, load: Load, s, v, a) -> TorqueTerms:
+    """Motor torque to drive ``load`` along the motion ``s, v, a`` (position, speed,
+    acceleration of the load, SI) through ``transmission``.
+
+    Works on numpy arrays (any shape) and on CasADi SX/MX symbols alike; the
+    terms are written once, below. ``motor`` is a ServoMotor or a rotor
+    inertia [kg m^2] (a number, or an array broadcasting against ``s``).
+    """
+    phi, omega, eps = transmission.motor_kinematics(s, v, a)
+    if _symbolic(phi):
+        _, mu, _ = transmission.symbolic_transfer(phi)
+    else:
+        _, mu, _ = transmission.transfer(phi)
+    m = load.moving_mass
+    forces = {f.name: f(s) for f in load.forces}
+    f_ext = sum(forces.values()) if forces else 0 * s
+    rotor = rotor_inertia_of(motor) * eps
+    trans = transmission.inertia * eps
+    inertial = m * a * mu
+    gravity = -m * load.gravity * mu
+    force_torques = {k: -f * mu for k, f in forces.items()}
+    load_force = m * (a - load.gravity) - f_ext
+    total = rotor + trans + load_force * mu
+    return TorqueTerms(phi, omega, eps, rotor, trans, inertial, gravity, force_torques, load_force, total)
+
+
+def reflected_inertia(transmission, load: Load, phi=None) -> float:
+    """Load inertia seen by the motor shaft [kg m^2]: transmission inertia + m * max(mu^2) over ``phi``."""
+    phi = np.zeros(1) if phi is None else np.asarray(phi, dtype=float)
+    _, mu, _ = transmission.transfer(phi)
+    return float(transmission.inertia + load.moving_mass * np.max(np.asarray(mu) ** 2))
+

@@ -1,0 +1,100 @@
+"""The ``[drive]`` section of a problem file: motor, load, limits, pulley range, belt, catalogues.
+
+Where it sits: io/problem_file.py calls :func:`parse_drive` for the
+``[drive]`` table; the :class:`DriveSpec` it returns (``problem.drive``)
+gives the load (load.py), the limits and belt of the checks (checks.py) and
+the catalogue (catalogue.py) that sizing.py and the design search.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import ProblemError
+from .catalogue import BELT_CORDS, load_catalogue
+from .checks import BeltSpec, DriveLimits
+from .load import G, Load, LoadForce
+from .transmission import PROFILE_PITCH
+
+
+@dataclass(frozen=True)
+class DriveSpec:
+    """The ``[drive]`` section of a problem file, SI units."""
+
+    motor: str | None
+    load: Load
+    limits: DriveLimits
+    profile: str = "GT3"
+    teeth_min: int = 14
+    teeth_max: int = 52
+    belt: str | None = None
+    belt_cord: str = "glass"
+    service_factor: float = 1.5
+    allowable_tension: float | None = None
+    catalogue_files: tuple[str, ...] = ()
+    file: str = ""
+
+    def catalogue(self, extra_files=()):
+        """The shipped catalogue plus this problem's and ``extra_files``' catalogue files."""
+        return load_catalogue(list(self.catalogue_files) + list(extra_files))
+
+    def belt_spec(self, catalogue) -> BeltSpec | None:
+        if self.belt is None:
+            return None
+        belt = catalogue.belt(self.belt, (self.file, "drive.belt"))
+        if self.profile not in catalogue.belt_methods:
+            raise ProblemError(self.file, "drive.belt", f"the catalogue has no belt method for profile {self.profile}")
+        if self.belt_cord not in belt.breaking_tension:
+            raise ProblemError(self.file, "drive.belt_cord", f"belt {belt.name} has no breaking tension for "
+                                                             f"{self.belt_cord} cord")
+        return BeltSpec(belt, catalogue.belt_methods[self.profile], self.service_factor, self.belt_cord,
+                        self.allowable_tension)
+
+
+def parse_drive(f, base_dir: Path | None = None) -> DriveSpec:
+    """Read the ``[drive]`` table (a :class:`~strokeopt.io.fields.Fields`) of a problem file."""
+    motor = f.string("motor", None)
+    mass = f.number("moving_mass_kg", positive=True)
+    gravity_dir = f.string("gravity", "down", choices=("down", "up", "off"))
+    # positions in problem files are measured upward
+    gravity = {"down": -G, "up": G, "off": 0.0}[gravity_dir]
+    limits = DriveLimits(f.number("peak_limit_pct", 300.0, positive=True),
+                         f.number("max_inertia_ratio", 10.0, positive=True))
+    profile = f.string("pulley_profile", "GT3", choices=tuple(PROFILE_PITCH))
+    tmin = f.number("pulley_teeth_min", 14, integer=True, min=1)
+    tmax = f.number("pulley_teeth_max", 52, integer=True, min=1)
+    if tmax < tmin:
+        raise f.error("pulley_teeth_max", f"{tmax} is below pulley_teeth_min {tmin}")
+    belt = f.string("belt", None)
+    cord = f.string("belt_cord", "glass", choices=BELT_CORDS)
+    service = f.number("belt_service_factor", 1.5, positive=True)
+    allowable = f.number("belt_allowable_tension_N", None, positive=True)
+    files = f.raw("catalogues", [])
+    if not isinstance(files, list) or not all(isinstance(x, str) for x in files):
+        raise f.error("catalogues", "must be an array of file names")
+    base = base_dir or Path(".")
+    resolved = []
+    for x in files:
+        p = Path(x) if Path(x).is_absolute() else base / x
+        if not p.is_file():
+            raise f.error("catalogues", f"catalogue file {x!r} not found (looked for {p})")
+        resolved.append(str(p))
+    forces = []
+    for row in f.tables("load_forces", required=False):
+        name = row.string("name")
+        kind = row.string("kind", choices=("spring", "constant"))
+        direction = {"up": 1.0, "down": -1.0}[row.string("direction", choices=("up", "down"))]
+        if kind == "spring":
+            forces.append(LoadForce(name, kind, direction, row.number("preload_N", 0.0, min=0.0),
+                                    row.number("stiffness_N_m", min=0.0),
+                                    row.number("contact_position_mm") * 1e-3))
+        else:
+            forces.append(LoadForce(name, kind, direction, row.number("force_N", min=0.0)))
+        row.finish()
+    if len({x.name for x in forces}) != len(forces):
+        raise f.error("load_forces", "two load forces have the same name")
+    f.finish()
+    return DriveSpec(motor, Load(mass, gravity, tuple(forces)), limits, profile, tmin, tmax, belt, cord, service,
+                     allowable, tuple(resolved), f.file)
+
