@@ -10,7 +10,7 @@ import pytest
 from strokeopt.bench import registry as bench
 from strokeopt.bench.sizing import size_pairs_loop
 from strokeopt.bench.run import run_benchmarks  # noqa: F401  (registers every benchmark)
-from strokeopt.cli import main
+from strokeopt.cli.main import main
 
 
 def test_registry_and_duplicate_names():

@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from strokeopt.cli import main
+from strokeopt.cli.main import main
 
 
 def test_kinematics_json(capsys, reference_path, tmp_path):
@@ -61,7 +61,7 @@ def test_json_stays_json_with_verbose_solver_logs(tmp_path):
 
     from conftest import ROOT
 
-    run = subprocess.run([sys.executable, "-m", "strokeopt.cli", "solve", str(ROOT / "problems/known_optima/min_jerk.toml"),
+    run = subprocess.run([sys.executable, "-m", "strokeopt", "solve", str(ROOT / "problems/known_optima/min_jerk.toml"),
                           "--json", "--verbose", "--plot", "none"], capture_output=True, text=True, cwd=tmp_path)
     assert run.returncode == 0, run.stderr
     assert json.loads(run.stdout)["status"] == "optimal"  # only JSON on stdout

@@ -6,7 +6,8 @@ import json
 
 import pytest
 
-from strokeopt.cli import build_parser, main
+from strokeopt.cli.main import main
+from strokeopt.cli.parser import build_parser
 
 
 def test_accuracy_json_and_plot(capsys, reference_path, tmp_path):

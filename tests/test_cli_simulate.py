@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from strokeopt.cli import main
+from strokeopt.cli.main import main
 
 
 def test_simulate_json(capsys, reference_path, tmp_path):

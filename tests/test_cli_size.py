@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from strokeopt.cli import main
+from strokeopt.cli.main import main
 
 
 def _json(capsys, argv):

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from strokeopt.cli import main
+from strokeopt.cli.main import main
 from strokeopt.design.solve import read_design
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -6,7 +6,7 @@ import casadi as ca
 import pytest
 
 from strokeopt import ForceLaw, ProblemError, load_problem
-from strokeopt.cli import main
+from strokeopt.cli.main import main
 
 
 def test_needle_bar_bodies_and_masses(reference):

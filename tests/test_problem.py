@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from strokeopt import ProblemError, load_problem
-from strokeopt.cli import main
+from strokeopt.cli.main import main
 
 
 def _run_error(capsys, argv):

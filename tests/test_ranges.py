@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from strokeopt import ProblemError
-from strokeopt.cli import main
+from strokeopt.cli.main import main
 from strokeopt.io.ranges import parse_spm_range
 
 

@@ -1,0 +1,1 @@
+"""The command line: ``main`` (errors to exit codes) -> ``parser`` (the grammar) -> ``commands`` (load, call the\nlibrary, hand the result to report/) with ``common`` (what every command shares)."""

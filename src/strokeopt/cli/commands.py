@@ -1,0 +1,355 @@
+"""The commands: each parses nothing and prints nothing of its own -- it loads the problem, calls the
+library and hands the result to report/ (text, JSON, figures). Exit code 0, or 1 for a failed check."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from ..errors import ProblemError
+from .common import _emit, _load, _plot_path, _spm_value, _write_figure
+
+
+def cmd_laws(args) -> int:
+    from ..motion.laws import law_table
+    from ..report.format import format_table, to_json
+
+    rows = law_table()
+    if args.json:
+        _emit(to_json({"laws": rows}))
+        return 0
+    for r in rows:
+        r["params"] = ", ".join(f"{k} = {v:g}" for k, v in r["params"].items()) or None
+    print(format_table(rows, [("law", "law"), ("params", "parameters"), ("C_v", "C_v"), ("C_a", "C_a"),
+                              ("C_j", "C_j"), ("continuity", "continuity"), ("first_jump", "first jump")],
+                       title="Classic motion laws, unit rise (v = C_v h/T, a = C_a h/T^2, jerk = C_j h/T^3)"))
+    print("\nC_j '-': the acceleration jumps (at the ends against a dwell, or inside), so the jerk is an impulse.")
+    return 0
+
+
+def cmd_kinematics(args) -> int:
+    from ..report.motion import plot_kinematics
+    from ..report.motion import kinematics_summary, kinematics_text
+    from ..report.format import to_json
+
+    problem = _load(args)
+    stroke = problem.stroke()
+    summary = kinematics_summary(problem, stroke, problem.spm)
+    if args.json:
+        _emit(to_json(summary))
+    else:
+        print(kinematics_text(summary))
+    _write_figure(lambda p: plot_kinematics(problem, stroke, problem.spm, p), _plot_path(args, "kinematics"), args)
+    return 0
+
+
+def cmd_size(args) -> int:
+    from ..drive.sizing import optimal_radius, size_drive
+    from ..report.drive import plot_sizing, sizing_text
+    from ..report.format import to_json
+
+    problem = _load(args)
+    if problem.drive is None:
+        raise ProblemError(args.problem, "drive", "the problem has no [drive] section (motor, moving_mass_kg, ...)")
+    catalogue = problem.drive.catalogue(args.catalogue)
+    progress = None
+    if args.max_spm and not args.json:
+        from tqdm import tqdm
+
+        progress = lambda it: tqdm(it, desc="max spm", unit="pair", file=sys.stderr, leave=False)  # noqa: E731
+    sizing = size_drive(problem, catalogue=catalogue, motors=args.motor, teeth=args.pulley_teeth,
+                        find_max_spm=args.max_spm, progress=progress)
+    report = sizing.to_dict(explain=args.explain)
+    if args.continuous_radius:
+        spec = problem.drive
+        model = lambda d: catalogue.pulley_inertia(spec.profile, d)  # noqa: E731
+        motors = {c.motor.name: c.motor for c in sizing.candidates}
+        report["continuous_radius"] = [optimal_radius(m, spec.load, sizing.kinematics, model).row()
+                                       for m in motors.values()]
+    if args.json:
+        _emit(to_json(report))
+    else:
+        print(sizing_text(sizing, report, explain=args.explain))
+    _write_figure(lambda p: plot_sizing(sizing, None, p), _plot_path(args, "sizing"), args)
+    return 0
+
+
+def cmd_bench(args) -> int:
+    from ..bench.registry import format_results
+    from ..bench.run import run_benchmarks
+    from ..report.format import to_json
+
+    results = run_benchmarks(args.only)
+    if args.json:
+        _emit(to_json({"benchmarks": [r.as_dict() for r in results]}))
+    else:
+        print(format_results(results))
+    return 0
+
+
+def cmd_accuracy(args) -> int:
+    from ..report.format import to_json
+    from ..report.servo import accuracy_text, plot_accuracy
+    from ..servo.accuracy import accuracy_report
+
+    stroke, label, extra = None, "", []
+    if args.design:
+        from ..design.solve import read_design
+
+        data, stroke = read_design(args.design)
+        if args.spm is not None and abs(_spm_value(args.spm) - float(data["spm"])) > 1e-9:
+            raise ProblemError(args.design, "spm", f"the design was solved at {data['spm']:g} spm, not at {args.spm} "
+                                                   "spm: omit --spm or solve the design at that rate")
+        args.spm = str(data["spm"])
+        label = f"optimal ({data.get('objective', 'design')})"
+        extra = [(label, stroke)]  # its row in the table of the classic laws
+        drive_used = _design_drive(args, data)
+    problem = _load(args)
+    progress = None
+    if (args.compare_laws or extra) and not args.json:
+        from tqdm import tqdm
+
+        def progress(items):
+            return tqdm(items, desc="laws", unit="law", file=sys.stderr, leave=False)
+    # with --design the whole report is of the design's stroke on its drive; the classic laws follow as a table
+    report, result = accuracy_report(problem, problem.spm, stroke=stroke, label=label,
+                                     compare_laws=args.compare_laws or bool(extra), extra_strokes=extra,
+                                     progress=progress)
+    if args.design:
+        report["drive_from_design"] = {"design": str(args.design), **drive_used}
+    if args.json:
+        _emit(to_json(report))
+    else:
+        print(accuracy_text(report))
+    _write_figure(lambda p: plot_accuracy(result, p), _plot_path(args, "accuracy"), args)
+    return 0
+
+
+def _design_drive(args, data: dict) -> dict:
+    """Make ``args.overrides`` use the motor and pulley a design.json was solved with (the design's
+    stroke is only right on its own drive); a --set forcing another motor or pulley is an error."""
+    from ..io.fields import parse_override
+
+    design = {"motor": data.get("motor"), "pulley_teeth": data.get("pulley_teeth")}
+    keys = {"motor": ("drive", "motor"), "pulley_teeth": ("transmission", "pulley_teeth")}
+    used = {}
+    for name, path in keys.items():
+        value = design[name]
+        if value is None:
+            continue
+        for text in args.overrides:
+            key, forced = parse_override(text)
+            if tuple(key) == path and forced != value:
+                raise ProblemError(args.design, name, f"the design was solved with {name} {value}, but --set {text} "
+                                                      "forces another: omit the --set or solve the design for it")
+        args.overrides.append(f"{'.'.join(path)}={value!r}" if name == "pulley_teeth"
+                              else f'{".".join(path)}="{value}"')
+        used[name] = value
+    return used
+
+
+def cmd_tradeoff(args) -> int:
+    from ..report.format import to_json
+    from ..report.servo import plot_tradeoff, tradeoff_text
+    from ..servo.tradeoff import tradeoff
+
+    problem = _load(args)
+    accuracies = None
+    if args.accuracies:
+        try:
+            accuracies = [float(x) * 1e-3 for x in args.accuracies.split(",")]
+        except ValueError:
+            raise ProblemError("--accuracies", "", f"expected comma-separated millimetres, got {args.accuracies!r}") from None
+        if not all(a > 0 and a != float("inf") for a in accuracies):
+            raise ProblemError("--accuracies", "", f"every accuracy must be positive, got {args.accuracies!r}")
+    if not args.resolution > 0:
+        raise ProblemError("--resolution", "", f"must be positive, got {args.resolution!r}")
+    progress = None
+    if not args.json:
+        from tqdm import tqdm
+
+        def progress(items):
+            return tqdm(items, desc="tradeoff", file=sys.stderr, leave=False)
+    report = tradeoff(problem, accuracies, strokes=args.strokes, resolution=args.resolution, progress=progress)
+    if args.json:
+        _emit(to_json(report))
+    else:
+        print(tradeoff_text(report))
+    _write_figure(lambda p: plot_tradeoff(report, p), _plot_path(args, "tradeoff"), args)
+    return 0
+
+
+def _sim_options(args):
+    from ..contact.simulate import SimulationOptions
+
+    # hard contact switches only: smoothing them is a numerical study device (SimulationOptions.smoothing,
+    # --study tolerance shows its bias), not a model option; at ordinary widths it changes the answer
+    return SimulationOptions(method=args.method, rtol=args.rtol, atol=args.atol, verbose=args.verbose)
+
+
+def _scene_name(args, problem) -> str:
+    if not problem.scenes:
+        raise ProblemError(str(problem.file), "scenes", "the problem defines no [scenes.*] (and [model]) to simulate")
+    name = args.scene or ("release" if "release" in problem.scenes else next(iter(problem.scenes)))
+    if name not in problem.scenes:
+        raise ProblemError(str(problem.file), "--scene", f"no scene {name!r}; the problem has: {', '.join(problem.scenes)}")
+    return name
+
+
+def _report_scene(args, problem, scene, result, extra=None, kind: str = "simulate") -> None:
+    from ..report.contact import plot_scene, scene_text
+    from ..report.format import to_json
+
+    summary = {**(extra or {}), **result.summary()}
+    if args.verbose:
+        print(f"integrator: {result.options.method}, {result.stats['nsteps']} steps, "
+              f"{result.stats['n_output']} output points", file=sys.stderr)
+    if args.json:
+        _emit(to_json(summary))
+    else:
+        print(scene_text(problem, scene, summary))
+    _write_figure(lambda p: plot_scene(result, p), _plot_path(args, f"{kind}_{scene}"), args)
+
+
+def cmd_simulate(args) -> int:
+    from ..contact.simulate import simulate_scene
+    from ..contact.studies import lag_onset_spm, sweep_spm, tolerance_study
+    from ..io.ranges import parse_spm_range
+    from ..report.contact import STUDY_COLUMNS, SWEEP_COLUMNS, plot_sweep, plot_tolerance_study
+    from ..report.format import format_table, to_json
+
+    spms = parse_spm_range(args.spm) if args.spm is not None else None
+    if spms is not None:
+        args.spm = spms if len(spms) > 1 else str(spms[0])
+    problem = _load(args)
+    scene = _scene_name(args, problem)
+    options = _sim_options(args)
+    if args.study == "tolerance":
+        if isinstance(args.spm, list):
+            raise ProblemError("--spm", "", "the tolerance study runs at one speed, not a range")
+        study = tolerance_study(problem, scene, problem.spm, progress=not args.json)
+        if args.json:
+            _emit(to_json(study))
+        else:
+            ref = study["reference"]
+            print(f"work-precision of scene {scene!r} at {study['spm']:g} spm against a reference at rtol "
+                  f"{ref['rtol']:g} (impact {ref['impact_velocity_m_s']:.4f} m/s at {ref['impact_angle_deg']:.3f} deg, "
+                  f"release {ref['release_angle_deg']:.3f} deg; {ref['cpu_time_s']:.2f} s CPU)")
+            print(format_table([r for r in study["rows"] if "failed" not in r], STUDY_COLUMNS))
+            for r in study["rows"]:
+                if "failed" in r:
+                    print(f"failed: {r['method']} rtol {r['rtol']:g} smoothing {r['smoothing_mm']:g} mm: {r['failed']}")
+        _write_figure(lambda p: plot_tolerance_study(study, p), _plot_path(args, f"tolerance_{scene}"), args)
+        return 0
+    if isinstance(args.spm, list):
+        rows = sweep_spm(problem, scene, args.spm, options, progress=not args.json)
+        onset = lag_onset_spm(rows)
+        premature = lag_onset_spm(rows, "premature_release")
+        if args.json:
+            _emit(to_json({"scene": scene, "lag_onset_spm": onset, "premature_release_onset_spm": premature,
+                           "rows": rows}))
+        else:
+            print(format_table(rows, SWEEP_COLUMNS, title=f"{problem.name}: scene {scene!r}, speed sweep "
+                                                          f"(interval times {problem.timing.interval_times})"))
+            if onset is None:
+                print("\nthe follower lags at no speed of the sweep")
+            else:
+                print(f"\nthe follower lags from {onset:g} spm" + (" (the first speed of the sweep: start lower to "
+                                                                   "find the onset)" if onset == rows[0]["spm"] else ""))
+            if premature is not None:
+                print(f"premature release from {premature:g} spm: gap N closes before the impact (columns "
+                      f"'premature', 'min gap N mm')")
+        _write_figure(lambda p: plot_sweep(rows, p), _plot_path(args, f"sweep_{scene}"), args)
+        return 0
+    result = simulate_scene(problem, scene, problem.spm, options=options)
+    _report_scene(args, problem, scene, result)
+    return 0
+
+
+def cmd_verify(args) -> int:
+    from ..contact.verify import load_design, verify
+
+    design = load_design(args.design, args.problem, args.overrides)
+    args.problem = str(design.problem.file)
+    scene = _scene_name(args, design.problem)
+    result = verify(design, scene, _sim_options(args))
+    _report_scene(args, design.problem, scene, result, {"design": str(args.design), "objective": design.objective},
+                  kind="verify")
+    return 0
+
+
+def cmd_solve(args) -> int:
+    from ..design.solve import OBJECTIVES, check_out_dir, compare_with_laws, design_summary, design_text, fastest_feasible, mesh_study, solve_design, sweep_design
+    from ..report.design import plot_design_sweep, plot_mesh_study
+    from ..report.motion import plot_kinematics
+    from ..report.format import format_table, to_json
+
+    sweep = None
+    if args.spm is not None and ":" in args.spm:
+        from ..io.ranges import parse_spm_range
+
+        sweep = parse_spm_range(args.spm)
+        args.spm = None
+    if args.objective is not None and args.objective not in OBJECTIVES:
+        raise ProblemError("--objective", "", f"{args.objective!r} is not one of {', '.join(OBJECTIVES)}")
+    if args.out is not None:
+        check_out_dir(args.out)  # before the solve, not after it
+    problem = _load(args)
+    progress = None
+    if not args.json:
+        from tqdm import tqdm
+
+        progress = lambda it, desc="solve": tqdm(it, desc=desc, unit="solve", file=sys.stderr, leave=False)  # noqa: E731
+    if args.study == "mesh":
+        rows = mesh_study(problem, objective=args.objective, progress=progress and (lambda it: progress(it, "mesh")))
+        if args.json:
+            _emit(to_json({"problem": problem.name, "spm": problem.spm, "study": "mesh", "rows": rows}))
+        else:
+            print(f"{problem.name} at {problem.spm:g} spm: the same design on each mesh (file's motor and pulley); "
+                  f"error against the last (finest) mesh")
+            print(format_table(rows, [("intervals", "intervals"), ("degree", "degree"), ("variables", "variables"),
+                                      ("objective_value", "objective"), ("objective_error_pct", "error %"),
+                                      ("violation_between_nodes", "violation between nodes"),
+                                      ("time_s", "time s")]))
+        _write_figure(lambda p: plot_mesh_study(rows, p), _plot_path(args, "mesh_study"), args)
+        return 0
+    if sweep is not None:
+        rows = sweep_design(problem, sweep, objective=args.objective,
+                         progress=progress and (lambda it: progress(it, "spm")))
+        best = fastest_feasible(rows)
+        at_end = best is not None and all(r["feasible"] for r in rows)  # the sweep found no limit
+        if args.json:
+            _emit(to_json({"problem": problem.name, "objective": args.objective or
+                           (problem.design.objective if problem.design else None), "rows": rows,
+                           "fastest_feasible_spm": best, "fastest_feasible_is_sweep_end": at_end}))
+        else:
+            print(format_table(rows, [("spm", "spm"), ("feasible", "feasible"), ("objective_value", "objective"),
+                                      ("motor", "motor"), ("pulley_teeth", "z"), ("peak_torque_N_m", "peak N m"),
+                                      ("rms_torque_N_m", "RMS N m"), ("solve_time_s", "time s"),
+                                      ("reason", "why not")],
+                               title=f"{problem.name}: optimal design over the stitch rate (warm-started)"))
+            print("\nno feasible stitch rate in the sweep" if best is None else
+                  f"\nfastest feasible stitch rate: >= {best:g} spm (the end of the sweep; every rate was feasible)"
+                  if at_end else f"\nfastest feasible stitch rate: {best:g} spm")
+        _write_figure(lambda p: plot_design_sweep(rows, p), _plot_path(args, "solve_sweep"), args)
+        return 0
+    design = solve_design(problem, objective=args.objective, verbose=args.verbose,
+                          progress=progress and (lambda it: progress(it, "motors")))
+    comparison = compare_with_laws(design)
+    if args.json:
+        _emit(to_json({**design_summary(design), "comparison": comparison}))
+    else:
+        print(design_text(design, comparison))
+    if args.out is not None:
+        written = design.write(args.out)
+        law_stroke = problem.stroke(design.spm)
+        fig_path = Path(args.out) / "stroke.png"
+        _write_figure(lambda p: plot_kinematics(problem, [design.stroke, law_stroke], design.spm, p), fig_path, args)
+        for path in written:
+            print(f"written {path}", file=sys.stderr if args.json else sys.stdout)
+    _write_figure(lambda p: plot_kinematics(problem, [design.stroke, problem.stroke(design.spm)], design.spm, p),
+                  _plot_path(args, "solve"), args)
+    if design.status == "limits exceeded":
+        print(f"strokeopt: {design.notes[0]}", file=sys.stderr)
+        return 1
+    return 0

@@ -1,0 +1,99 @@
+"""What every command shares: loading the problem with the command's options, --spm values, figure
+paths and writing, and printing JSON (stdout, also while solver logs go to stderr)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from ..errors import ProblemError
+
+DEFAULT_OUT = Path("strokeopt-out")
+
+
+
+
+
+def _spm_value(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise ProblemError("--spm", "", f"expected a number of stitches per minute, got {text!r}") from None
+    if not value > 0 or value != value or value == float("inf"):
+        raise ProblemError("--spm", "", f"must be positive, got {text}")
+    return value
+
+
+def _load(args):
+    from ..motion.laws import make_law
+    from ..io.problem_file import load_problem
+
+    overrides = list(args.overrides)
+    if getattr(args, "spm", None) is not None and not isinstance(args.spm, list):
+        overrides.append(f"machine.spm={_spm_value(args.spm)!r}")
+    problem = load_problem(args.problem, overrides)
+    law_name = getattr(args, "law", None)
+    chi = getattr(args, "chi", None)
+    if law_name is not None or chi is not None:
+        name = law_name or problem.default_law.name
+        params = {} if law_name and law_name != problem.default_law.name else dict(problem.default_law.params)
+        if chi is not None:
+            params["chi"] = chi
+        problem = problem.with_law(make_law(name, where=("command line", "--law/--chi"), **params))
+    return problem
+
+
+def _plot_path(args, default_name: str) -> Path | None:
+    """Where to write the figure: --plot FILE, none with --plot none, else strokeopt-out/<name>."""
+    if args.plot is not None:
+        return None if args.plot.lower() == "none" else Path(args.plot)
+    stem = Path(args.problem).stem if hasattr(args, "problem") else "strokeopt"
+    return DEFAULT_OUT / f"{stem}_{default_name}.png"
+
+
+def _write_figure(figure_fn, path: Path | None, args) -> None:
+    if path is None:
+        return
+    import matplotlib
+
+    matplotlib.use("Agg")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure_fn(path)
+    print(f"figure written to {path}", file=sys.stderr if args.json else sys.stdout)
+
+
+_JSON_OUT = None  # where --json output goes while solver logs are sent to stderr
+
+
+def _emit(text: str) -> None:
+    """Print the command's JSON (stdout, also when --verbose sends every log to stderr)."""
+    print(text, file=_JSON_OUT or sys.stdout)
+
+
+class _LogsToStderr:
+    """With --json --verbose: every log (IPOPT and SUNDIALS through CasADi, which print via
+    Python's sys.stdout or the C stdout) goes to stderr, so stdout carries only the JSON."""
+
+    def __enter__(self):
+        import os
+
+        global _JSON_OUT
+        sys.stdout.flush()
+        self._saved_fd = os.dup(1)
+        _JSON_OUT = os.fdopen(os.dup(self._saved_fd), "w")
+        os.dup2(2, 1)
+        self._saved_stdout = sys.stdout
+        sys.stdout = sys.stderr
+        return self
+
+    def __exit__(self, *exc):
+        import os
+
+        global _JSON_OUT
+        _JSON_OUT.flush()
+        _JSON_OUT.close()
+        _JSON_OUT = None
+        sys.stdout = self._saved_stdout
+        os.dup2(self._saved_fd, 1)
+        os.close(self._saved_fd)
+        return False

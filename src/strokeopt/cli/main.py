@@ -1,0 +1,63 @@
+"""`strokeopt` command line: parse, call the public API, print or write. Thin on purpose.
+
+Exit codes: 0 success, 2 bad input (problem file, option, catalogue) with a
+one-line message naming the file and the field, 1 a solve or a check that
+failed for a stated reason.
+"""
+
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from ..errors import ProblemError, SolverError, StrokeoptError
+from .common import _LogsToStderr
+from .parser import build_parser
+
+
+def _check_plot_format(args) -> None:
+    """A --plot file name matplotlib cannot write is bad input: say so before any work is done."""
+    plot = getattr(args, "plot", None)
+    if plot is None or plot.lower() == "none":
+        return
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    formats = FigureCanvasBase.get_supported_filetypes()
+    suffix = Path(plot).suffix.lower().lstrip(".")
+    if suffix not in formats:
+        raise ProblemError("--plot", plot, f"cannot write a figure as {suffix or 'a file without extension'!r}; "
+                                           f"use one of .{', .'.join(sorted(formats))}")
+
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        _check_plot_format(args)
+        if getattr(args, "json", False) and getattr(args, "verbose", False):
+            with _LogsToStderr():
+                return args.run(args)
+        return args.run(args)
+    except ProblemError as exc:
+        print(f"strokeopt: error: {exc}", file=sys.stderr)
+        return 2
+    except SolverError as exc:
+        print(f"strokeopt: failed: {exc}", file=sys.stderr)
+        return 1
+    except StrokeoptError as exc:
+        print(f"strokeopt: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("strokeopt: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:  # e.g. `strokeopt size ... | head`: the reader left, nothing to report
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

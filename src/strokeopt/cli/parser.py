@@ -1,0 +1,198 @@
+"""The command line's grammar: every command, its options and its help (with an example)."""
+
+from __future__ import annotations
+
+import argparse
+
+from .commands import (cmd_accuracy, cmd_bench, cmd_kinematics, cmd_laws, cmd_simulate, cmd_size, cmd_solve,
+                       cmd_tradeoff, cmd_verify)
+from .common import DEFAULT_OUT
+
+
+def _problem_parent() -> argparse.ArgumentParser:
+    """Options every command on a problem file takes."""
+    p = argparse.ArgumentParser(add_help=False)
+    p.add_argument("problem", metavar="PROBLEM", help="design problem file (TOML), e.g. problems/deco2000_needle_bar.toml")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY.PATH=VALUE",
+                   help="override a value of the problem file, validated like the file "
+                        "(repeatable; arrays 1-based: --set 'timing.intervals[2].law=poly5')")
+    p.add_argument("--json", action="store_true", help="print only JSON on stdout (for scripts)")
+    p.add_argument("--verbose", action="store_true", help="print solver and integrator output")
+    return p
+
+
+def _stroke_options(p: argparse.ArgumentParser, sweep: bool = False, law: bool = True) -> None:
+    """--spm (and a START:STOP:STEP sweep where the command has one), --law, --chi."""
+    p.add_argument("--spm", help="stitches per minute" + (", or a sweep START:STOP:STEP" if sweep else "")
+                   + " (default: machine.spm of the file)")
+    if law:
+        p.add_argument("--law", help="use this motion law for every move (see 'strokeopt laws')")
+        p.add_argument("--chi", type=float, help="shape parameter chi of the modified sine law (0 < chi <= 0.25)")
+
+
+def _plot_option(p: argparse.ArgumentParser, name: str | None) -> None:
+    where = f"default {DEFAULT_OUT}/<problem>_{name}.png; " if name else ""
+    p.add_argument("--plot", metavar="FILE", help=f"figure file ({where}'none' for no figure)")
+
+
+def _simulation_arguments(p) -> None:
+    p.add_argument("--scene", help="scene of the problem file ([scenes.NAME]; default: release, else the first)")
+    p.add_argument("--method", default="cvodes", choices=("cvodes", "idas"), help="SUNDIALS integrator (default cvodes)")
+    p.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance (default 1e-5: impact velocity to ~1e-4 m/s)")
+    p.add_argument("--atol", type=float, default=1e-6,
+                   help="absolute tolerance in scaled states: positions in mm, velocities in m/s (default 1e-6)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="strokeopt",
+        description="Design servo-driven reciprocating mechanisms (electronic cams): motion laws, "
+                    "kinematics, drive sizing, optimal strokes and contact-model verification.",
+        epilog="Start with: strokeopt solve problems/deco2000_needle_bar.toml  "
+               "(each command has --help with an example).",
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    problem = _problem_parent()
+
+    p = sub.add_parser("laws", help="table of the classic motion laws and their characteristic values",
+                       description="The classic motion laws on a unit rise and their characteristic values "
+                                   "C_v, C_a, C_j (computed from the laws, not typed in).",
+                       epilog="Example: strokeopt laws --json")
+    p.add_argument("--json", action="store_true", help="print only JSON on stdout")
+    p.set_defaults(run=cmd_laws)
+
+    p = sub.add_parser("kinematics", parents=[problem], help="peak speed, acceleration and jerk of each interval",
+                       description="Kinematics of the problem's stroke: per interval the stroke, span, time, peak "
+                                   "bar speed, acceleration and jerk, and peak pulley speed and acceleration; "
+                                   "a figure of position, velocity, acceleration and jerk over the cam angle.",
+                       epilog="Example: strokeopt kinematics problems/deco2000_needle_bar.toml --spm 600 --law poly5")
+    _stroke_options(p)
+    _plot_option(p, "kinematics")
+    p.set_defaults(run=cmd_kinematics)
+
+    p = sub.add_parser("size", parents=[problem], help="rank motors and pulleys: torque, RMS, speed, inertia, belt checks",
+                       description="Drive sizing: every catalogue motor with every allowed pulley, over the whole "
+                                   "cycle of the problem's stroke: peak torque against the motor's peak and the "
+                                   "drive's peak limit (overload = peak / rated), RMS torque against the rated "
+                                   "torque, peak speed against the rated speed, load/rotor inertia ratio, belt width "
+                                   "and breaking checks (thesis appendix 2). The load is the [drive] section of the "
+                                   "problem: moving mass, gravity, load forces.",
+                       epilog="Example: strokeopt size problems/deco2000_needle_bar.toml --spm 600 --max-spm "
+                              "--motor 055U2B30 --explain")
+    _stroke_options(p)
+    p.add_argument("--motor", action="append", metavar="NAME", help="only this catalogue motor (repeatable)")
+    p.add_argument("--pulley-teeth", type=int, action="append", metavar="Z", help="only this pulley (repeatable)")
+    p.add_argument("--catalogue", action="append", default=[], metavar="FILE",
+                   help="an extra catalogue file (motors, pulleys, belts; repeatable)")
+    p.add_argument("--max-spm", action="store_true",
+                   help="also find each pair's highest stitch rate with every check passing (bisection, 1 spm)")
+    p.add_argument("--continuous-radius", action="store_true",
+                   help="also the pulley radius minimising each motor's peak torque (not rounded to teeth)")
+    p.add_argument("--explain", action="store_true", help="torque breakdown at the peak and every check's margin")
+    _plot_option(p, "sizing")
+    p.set_defaults(run=cmd_size)
+
+    p = sub.add_parser("solve", parents=[problem], help="optimal stroke, pulley and motor by direct collocation",
+                       description="Solve the design problem of the file ([design], [drive]): the stroke of every move "
+                                   "between its fixed dwells by direct collocation (IPOPT), with the pulley radius "
+                                   "(continuous, then the nearest catalogue tooth counts) and the motor (enumerated "
+                                   "or Bonmin) as decisions. Prints the motor, pulley, objective, every check with its "
+                                   "margin, the active constraints and a comparison with the classic laws on the same "
+                                   "drive. --spm START:STOP:STEP sweeps the stitch rate (warm-started) and prints the "
+                                   "fastest feasible rate; --study mesh prints what accuracy costs in time. "
+                                   "Objectives: min_peak_torque, min_rms_torque, min_energy, min_peak_accel, "
+                                   "min_accel_squared, min_jerk, min_snap.",
+                       epilog="Examples: strokeopt solve problems/deco2000_needle_bar.toml; "
+                              "strokeopt solve problems/deco2000_needle_bar.toml --spm 600 --out out/; "
+                              "strokeopt solve problems/deco2000_needle_bar.toml --spm 400:900:50; "
+                              "strokeopt solve problems/known_optima/min_jerk.toml")
+    p.add_argument("--objective", help="objective (overrides design.objective of the file)")
+    _stroke_options(p, sweep=True, law=False)
+    p.add_argument("--out", metavar="DIR", help="write design.json, cam_table.csv (0.1 deg) and stroke.png into DIR")
+    p.add_argument("--study", choices=("mesh",), help="'mesh': objective error, violation between nodes and time "
+                                                      "over mesh sizes and collocation degrees")
+    p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_solve.png; "
+                                                  "'none' for no figure)")
+    p.set_defaults(run=cmd_solve)
+
+    p = sub.add_parser("bench", help="speed benchmarks, each against a reference measured in the same run",
+                       description="Run the registered benchmarks (strokeopt/bench.py): each times a capability "
+                                   "and a reference implementation side by side and prints the ratio and its target.",
+                       epilog="Example: strokeopt bench --only size_catalogue")
+    p.add_argument("--only", action="append", metavar="NAME", help="run only this benchmark (repeatable)")
+    p.add_argument("--json", action="store_true", help="print only JSON on stdout")
+    p.set_defaults(run=cmd_bench)
+
+    p = sub.add_parser("simulate", parents=[problem],
+                       help="contact model over one cycle: impact, lag, gap N, needle release (CasADi CVODES)",
+                       description="Integrate a scene of the problem's contact model ([model], [scenes.NAME]) over one "
+                                   "cam cycle with its driven body following the problem's stroke, from rest. Prints the "
+                                   "impact velocity and angle of the control member on the stop, the lag behind the "
+                                   "shell and when it ends, the smallest remaining gap N before the impact, the needle "
+                                   "release angle and whether it was premature, peak pad, contact and drive forces. "
+                                   "--spm START:STOP:STEP sweeps the speed; --study tolerance prints a work-precision "
+                                   "table. Cam angles: 360 deg per cycle, 0 at the start of the first interval.",
+                       epilog="Examples: strokeopt simulate problems/deco2000_needle_bar.toml --scene release --spm 600; "
+                              "strokeopt simulate problems/deco2000_needle_bar.toml --spm 300:1200:20 --plot sweep.png; "
+                              "strokeopt simulate problems/deco2000_needle_bar.toml --set "
+                              "model.springs.k2.stiffness_N_m=1240 --set model.contacts.c32.gap_mm=6.5")
+    _stroke_options(p, sweep=True)
+    _simulation_arguments(p)
+    p.add_argument("--study", choices=("tolerance",),
+                   help="'tolerance': error of impact velocity and release angle against a tight reference vs CPU "
+                        "time, over tolerances and smoothing widths")
+    p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_simulate_<scene>.png; "
+                                                  "'none' for no figure)")
+    p.set_defaults(run=cmd_simulate)
+
+    p = sub.add_parser("verify", help="simulate a scene with the stroke of a design.json (written by the design solve)",
+                       description="Re-simulate an optimised stroke: read DESIGN.json (its exact stroke, speed and "
+                                   "problem file) and integrate a scene of the problem's contact model with it, "
+                                   "reporting the same results as 'simulate'.",
+                       epilog="Example: strokeopt solve problems/deco2000_needle_bar.toml --out out && "
+                              "strokeopt verify out/design.json --scene release")
+    p.add_argument("design", metavar="DESIGN.json", help="design file written by the design solve")
+    p.add_argument("--problem", help="problem file (default: the problem_file recorded in DESIGN.json)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY.PATH=VALUE",
+                   help="override a value of the problem file (e.g. --set model.springs.k2.stiffness_N_m=1240)")
+    p.add_argument("--json", action="store_true", help="print only JSON on stdout (for scripts)")
+    p.add_argument("--verbose", action="store_true", help="print integrator output")
+    _simulation_arguments(p)
+    p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_verify_<scene>.png; "
+                                                  "'none' for no figure)")
+    p.set_defaults(run=cmd_verify)
+
+    p = sub.add_parser("accuracy", parents=[problem], help="handover accuracy: servo loop, belt stretch, encoder",
+                       description="Predict how far the bar is from its commanded position at the handover and over "
+                                   "the cycle, from the cascade position/speed loop of the servo drive (sampling, "
+                                   "feed-forwards, gains by a stated rule, [servo]), the belt as a spring between "
+                                   "motor and bar, and the encoder resolution; the error is split into servo "
+                                   "tracking, belt stretch (inertia and load forces) and encoder quantisation. "
+                                   "--compare-laws adds the handover error and the residual vibration of every "
+                                   "classic law on the same drive.",
+                       epilog="Example: strokeopt accuracy problems/deco2000_needle_bar.toml --spm 600 --compare-laws")
+    _stroke_options(p)
+    p.add_argument("--compare-laws", action="store_true",
+                   help="also report handover error and residual vibration of every classic law")
+    p.add_argument("--design", metavar="DESIGN_JSON",
+                   help="predict for the optimal stroke of a design.json (strokeopt solve --out) on the motor and "
+                        "pulley it was solved with, at its rate; the classic laws follow as a table")
+    _plot_option(p, "accuracy")
+    p.set_defaults(run=cmd_accuracy)
+
+    p = sub.add_parser("tradeoff", parents=[problem], help="what accuracy costs: highest stitch rate per handover accuracy",
+                       description="For required handover accuracies (default 0.02 to 1 mm) find the highest stitch "
+                                   "rate at which the handover error (strokeopt accuracy) and every drive limit still "
+                                   "hold, with the problem's classic law and, separately, with the optimal stroke "
+                                   "(strokeopt solve with the accuracy constraint, on the problem's motor and pulley); "
+                                   "each point names its binding limit. The optimal stroke needs one design solve "
+                                   "per trial rate: it takes minutes.",
+                       epilog="Example: strokeopt tradeoff problems/deco2000_needle_bar.toml --strokes classic "
+                              "--accuracies 0.05,0.1,0.5")
+    p.add_argument("--accuracies", metavar="MM,MM,...", help="required accuracies in mm (default 0.02,0.03,0.05,0.1,0.2,0.3,0.5,1)")
+    p.add_argument("--strokes", choices=("both", "classic", "optimal"), default="both",
+                   help="which strokes to compare (default both)")
+    p.add_argument("--resolution", type=float, default=10.0, help="stitch-rate resolution of the search [spm] (default 10)")
+    _plot_option(p, "tradeoff")
+    p.set_defaults(run=cmd_tradeoff)
+    return parser
