@@ -3,8 +3,6 @@
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
-
 from .format import format_table, format_value
 from ..design.result import Design, move_direction
 from ..design.settings import DesignSettings
@@ -12,6 +10,8 @@ from ..design.settings import DesignSettings
 
 def plot_mesh_study(rows: list[dict], path=None):
     """Work-precision of the design collocation: objective error and violation between nodes vs solve time."""
+    import matplotlib.pyplot as plt  # here: text reports do not import matplotlib
+
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
     for degree in sorted({r["degree"] for r in rows}):
         sel = [r for r in rows if r["degree"] == degree and not r.get("reference")]
@@ -38,6 +38,8 @@ def plot_mesh_study(rows: list[dict], path=None):
 
 def plot_design_sweep(rows: list[dict], path=None):
     """Optimal objective (and peak torque) over the stitch rate of a design sweep; infeasible rates marked."""
+    import matplotlib.pyplot as plt
+
     fig, ax = plt.subplots(figsize=(8, 4), constrained_layout=True)
     ok = [r for r in rows if r["feasible"]]
     bad = [r for r in rows if not r["feasible"]]
