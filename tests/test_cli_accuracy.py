@@ -133,7 +133,8 @@ def test_accuracy_with_an_optimal_design(capsys, reference, reference_path, tmp_
     # the residual vibration of the optimal stroke next to the classic laws (issue scope 3)
     from dataclasses import replace
 
-    from strokeopt.design.solve import DesignSettings, solve_design
+    from strokeopt.design.settings import DesignSettings
+    from strokeopt.design.solve import solve_design
 
     settings = replace(reference.design or DesignSettings(), motor_choice="fixed", pulley="fixed", mesh_intervals=20)
     design = solve_design(reference, spm=600, settings=settings)
@@ -155,7 +156,9 @@ def test_accuracy_uses_the_drive_of_the_design(capsys, reference_path, tmp_path)
     # a design solved on a 22-tooth pulley is checked on that pulley and its motor, not the file's 28 teeth
     from dataclasses import replace
 
-    from strokeopt.design.solve import DesignSettings, read_design, solve_design
+    from strokeopt.design.settings import DesignSettings
+    from strokeopt.design.solve import solve_design
+    from strokeopt.io.design_file import read_design
     from strokeopt.io.problem_file import load_problem
     from strokeopt.servo.accuracy import handover_accuracy
 

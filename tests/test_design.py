@@ -10,7 +10,11 @@ import pytest
 
 from strokeopt import ProblemError, SolverError, load_problem
 from strokeopt.design.collocation import Mesh, MoveSolution
-from strokeopt.design.solve import DesignSettings, _term_name, compare_with_laws, fastest_feasible, read_design, solve_design, sweep_design
+from strokeopt.design.compare import compare_with_laws
+from strokeopt.design.settings import DesignSettings
+from strokeopt.design.solve import solve_design
+from strokeopt.design.studies import fastest_feasible, sweep_design
+from strokeopt.io.design_file import read_design
 from strokeopt.drive.checks import drive_checks
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -256,6 +260,16 @@ def test_bonmin_and_enumeration_choose_the_same_motor(capfd):
     assert capfd.readouterr().out == ""
 
 
-def test_term_names_drop_the_module():
-    assert _term_name("servo loop and belt (servo.py)") == "servo loop and belt"
-    assert _term_name("encoder (4096 counts)") == "encoder (4096 counts)"
+def test_nlp_cache_is_bounded_and_keyed_without_ids():
+    from strokeopt.design.nlp import NLP_CACHE, NlpCache, structure_key
+    from strokeopt.design.request import SolveRequest
+
+    p = load_problem(KNOWN / "min_jerk.toml")
+    d = solve_design(p)
+    key = structure_key(SolveRequest(p, p.spm, p.design, d.mesh, "min_jerk"))
+    assert not any(isinstance(k, int) and k > 2**20 for k in key)  # no id() in the key
+    assert NLP_CACHE.find(key, p, [], d.mesh) is not None  # the solve's structure is cached
+    small = NlpCache(size=2)
+    for i in range(5):
+        small.add(("key", i), object.__new__(type("G", (), {"problem": p, "pins": ()})))
+    assert len(small) == 2

@@ -228,12 +228,26 @@ def test_error_kernel_reproduces_the_simulation(setup):
     assert kernel.error_at(stroke, t_h) == pytest.approx(sim.at_handover(sim.error), rel=0.02)
 
 
-def test_servo_term_is_registered_in_the_design():
-    from strokeopt.design import solve as design
-    from strokeopt.servo.kernel import servo_handover_error
+def test_servo_term_is_given_to_problems_with_a_servo_section(reference):
+    # the handover error terms are an argument of the design: a [servo] problem carries the servo's
+    # term, a problem without [servo] none, and error_terms=() takes the accuracy check out of a solve
+    from pathlib import Path
 
-    assert servo_handover_error in design.HANDOVER_ERROR_TERMS
-    assert design.HANDOVER_ERROR_TERMS.count(servo_handover_error) == 1
+    from strokeopt import load_problem
+    from strokeopt.design.solve import solve_design
+    from strokeopt.servo.kernel import ServoErrorTerm
+
+    root = Path(__file__).resolve().parents[1]
+    assert reference.servo is not None and reference.error_terms == (ServoErrorTerm(),)
+    plain = load_problem(root / "problems" / "known_optima" / "min_jerk.toml")
+    assert plain.servo is None and plain.error_terms == ()
+    fixed = ['design.motor_choice="fixed"', 'design.pulley="fixed"', "design.refinements=0"]
+    p = load_problem(root / "problems" / "deco2000_needle_bar.toml", fixed)
+    with_term = solve_design(p, spm=600)
+    assert any(c["name"] == "handover accuracy (servo loop and belt)" for c in with_term.checks)
+    without = solve_design(p, spm=600, error_terms=())
+    assert not any(c["name"].startswith("handover accuracy") for c in without.checks)
+    assert any("NOT checked" in n for n in without.notes)
 
 
 @pytest.mark.slow
@@ -242,7 +256,8 @@ def test_design_with_the_accuracy_constraint_resimulates_within_it(setup):
     # full loop model (table sampling, load forces, worst table phase), meets 0.5 mm; and a tight
     # 0.05 mm constraint (active in the design) holds in the re-simulation to within the effects
     # the design's term leaves out
-    from strokeopt.design.solve import DesignSettings, solve_design
+    from strokeopt.design.settings import DesignSettings
+    from strokeopt.design.solve import solve_design
 
     problem, settings, axis, gains = setup
     base = replace(problem.design or DesignSettings(), motor_choice="fixed", pulley="fixed")

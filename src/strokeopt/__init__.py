@@ -33,14 +33,21 @@ from .drive.load import Load, LoadForce, load_torque
 from .drive.sizing import optimal_radius, size_drive
 from .drive.spec import DriveSpec
 from .design.collocation import Mesh
-from .design.solve import OBJECTIVES, Design, DesignSettings, compare_with_laws, design_text, mesh_study, read_design, solve_design, sweep_design
+from .design.objectives import OBJECTIVES
+from .design.result import Design
+from .design.settings import DesignSettings
+from .design.compare import compare_with_laws
+from .report.design import design_text
+from .design.studies import mesh_study, sweep_design
+from .io.design_file import read_design
+from .design.solve import solve_design
 from .errors import ProblemError, SolverError, StrokeoptError
 from .motion.laws import LAW_NAMES, Characteristics, MotionLaw, law_table, make_law
 from .contact.model import Body, Element, ForceLaw, Model
 from .problem import Problem
 from .io.problem_file import load_problem
 from .contact.scene import Scene, make_scene
-from .servo.kernel import servo_handover_error  # noqa: F401  (registers the design term on import)
+from .servo.kernel import ServoErrorTerm  # noqa: F401  (the design's handover error term of a [servo] problem)
 from .servo.accuracy import AccuracyResult, accuracy_report, handover_accuracy
 from .servo.plant import DriveAxis, axis_from_problem
 from .servo.settings import ServoSettings

@@ -19,7 +19,7 @@ from .motion.timing import TimingDiagram
 if TYPE_CHECKING:
     from .contact.model import Model
     from .contact.scene import Scene
-    from .design.solve import DesignSettings
+    from .design.settings import DesignSettings
     from .drive.spec import DriveSpec
     from .servo.settings import ServoSettings
 
@@ -41,6 +41,9 @@ class Problem:
     drive: DriveSpec | None = field(default=None, repr=False)  # [drive]: motor, load, limits (drive.py)
     design: DesignSettings | None = field(default=None, repr=False)  # [design]: optimal stroke (design.py)
     servo: "ServoSettings | None" = field(default=None, repr=False)  # [servo]: servo loop and belt (servo.py)
+    #: the terms of the handover position error the design holds (design.request.ErrorTerm; the
+    #: problem file gives the servo's term with a [servo] section)
+    error_terms: tuple = field(default=(), repr=False)
 
     @property
     def pulley_teeth(self) -> int:

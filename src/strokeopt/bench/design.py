@@ -7,7 +7,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..design.solve import DriveChoice, _DriveSetup, _solve_one, _solver_options, clear_cache, solve_design
+from ..design.nlp import clear_cache
+from ..design.refine import solve_one
+from ..design.request import DriveChoice, DriveSetup, SolveRequest
+from ..design.solve import solve_design
+from ..design.solver import solver_options
 from ..io.problem_file import load_problem
 from .registry import BenchResult, BenchRow, benchmark, best_time, reference_problem_path
 
@@ -23,15 +27,14 @@ def _bench_design_resolve() -> BenchResult:
     p = load_problem(reference_problem_path(), ['design.motor_choice="fixed"', 'design.pulley="fixed"',
                                                 "machine.spm=600"])
     s = replace(p.design, refinements=0)
-    drive = _DriveSetup(p, s)
-    choice = DriveChoice(drive.fixed_motor(), 28)
-    opts = _solver_options(s, None, False)
+    drive = DriveSetup(p, s)
+    req = SolveRequest(p, 600.0, s, s.mesh, s.objective, drive, DriveChoice(drive.fixed_motor(), 28),
+                       solver_options(s, None, False))  # no handover error terms
     clear_cache()
     t0 = time.perf_counter()
-    first = _solve_one(p, 600.0, s, s.mesh, s.objective, None, drive, choice, opts, with_terms=False)
+    first = solve_one(req)
     cold = time.perf_counter() - t0
-    warm = best_time(lambda: _solve_one(p, 600.0, s, s.mesh, s.objective, first.sols, drive, choice, opts,
-                                        with_terms=False), repeat=3)
+    warm = best_time(lambda: solve_one(replace(req, warm=first.sols)), repeat=3)
     return BenchResult(rows=[BenchRow("first solve (builds the NLP and its derivatives)", cold,
                                       f"3 moves, {s.mesh.intervals} intervals x degree {s.mesh.degree}"),
                              BenchRow("re-solve, built solver, warm start", warm)],

@@ -94,7 +94,7 @@ def cmd_accuracy(args) -> int:
 
     stroke, label, extra = None, "", []
     if args.design:
-        from ..design.solve import read_design
+        from ..io.design_file import read_design
 
         data, stroke = read_design(args.design)
         if args.spm is not None and abs(_spm_value(args.spm) - float(data["spm"])) > 1e-9:
@@ -279,7 +279,12 @@ def cmd_verify(args) -> int:
 
 
 def cmd_solve(args) -> int:
-    from ..design.solve import OBJECTIVES, check_out_dir, compare_with_laws, design_summary, design_text, fastest_feasible, mesh_study, solve_design, sweep_design
+    from ..design.compare import compare_with_laws
+    from ..design.objectives import OBJECTIVES
+    from ..design.solve import solve_design
+    from ..design.studies import fastest_feasible, mesh_study, sweep_design
+    from ..io.design_file import check_out_dir
+    from ..report.design import design_summary, design_text
     from ..report.design import plot_design_sweep, plot_mesh_study
     from ..report.motion import plot_kinematics
     from ..report.format import format_table, to_json

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..design.solve import read_design
+from ..io.design_file import read_design
 from ..errors import ProblemError
 from ..io.problem_file import load_problem
 from .simulate import SceneResult, SimulationOptions, simulate_scene

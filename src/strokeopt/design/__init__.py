@@ -1,1 +1,22 @@
-"""design"""
+"""The optimal stroke, pulley and motor by direct collocation; modules in data-flow order:
+
+settings      ``[design]``: DesignSettings, parse_design
+request       SolveRequest (what one solve needs), Move, DriveSetup, DriveChoice, the ErrorTerm protocol
+collocation   the collocated move in unit form (Mesh, MoveVariables, MoveSolution, move_piece)
+nlp           the builder (Built), the built structure (Graph), the bounded NlpCache, one solve's Nlp
+drive_model   pulley radius, motor, torque and belt force in the NLP
+pins          pinned points where a load force switches on
+limits        one builder per limit (jerk, peak torque, speed, RMS, belt, inertia ratio, handover accuracy)
+objectives    one builder per objective (REGISTRY, OBJECTIVES)
+solver        nlpsol plumbing and options
+fine_grid     the solution read between the collocation nodes
+diagnose      why a solve is infeasible (relaxed NLP)
+refine        solve_one: pinned points, lazy accuracy, mesh refinement
+parts         motor and pulley search
+solve         solve_design
+result        Design, MoveResult, stroke_from_solutions
+compare       compare_with_laws
+studies       sweep_design, fastest_feasible, mesh_study
+
+Files: strokeopt.io.design_file; text and figures: strokeopt.report.design.
+"""

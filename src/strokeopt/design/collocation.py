@@ -22,6 +22,7 @@ torque...) are imposed at the nodes (interval starts and collocation points);
 
 Everything here is linear algebra on precomputed numpy matrices applied to
 CasADi MX symbols (built once, then ``expand``-ed to SX by the solver).
+:func:`move_piece` turns a solved move back into a stroke piece (the exact polynomials).
 """
 
 from __future__ import annotations
@@ -32,6 +33,8 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 from numpy.polynomial import Polynomial
+
+from ..motion.stroke import Piece
 
 SCHEMES = ("radau",)
 
@@ -259,3 +262,22 @@ class MoveSolution:
 def fine_grid(mesh: Mesh, per_interval: int = 20) -> np.ndarray:
     """Unit times with ``per_interval`` points inside every mesh interval (ends included)."""
     return np.linspace(0.0, 1.0, mesh.intervals * per_interval + 1)
+
+
+def move_piece(t_start: float, duration: float, start: float, stroke: float, sol: MoveSolution, label: str) -> Piece:
+    """A stroke piece reproducing the collocation polynomials of one move exactly (one branch per mesh interval)."""
+    tau = ca.SX.sym("tau")
+    h = sol.mesh.h * duration
+    coefs = sol.position_polynomials(duration, start, stroke)
+    breaks = np.arange(sol.mesh.intervals) * h
+
+    def horner(c, u):
+        acc = ca.SX(float(c[-1]))
+        for ck in c[-2::-1]:
+            acc = acc * u + float(ck)
+        return acc
+
+    expr = horner(coefs[-1], tau - breaks[-1])
+    for k in range(len(coefs) - 2, -1, -1):
+        expr = ca.if_else(tau < breaks[k + 1], horner(coefs[k], tau - breaks[k]), expr)
+    return Piece(t_start, duration, ca.Function("optimal_move", [tau], [expr]), label)

@@ -13,13 +13,14 @@ from pathlib import Path
 
 from ..contact.model import parse_model
 from ..contact.scene import parse_scenes
-from ..design.solve import parse_design
+from ..design.settings import parse_design
 from ..drive.spec import parse_drive
 from ..drive.transmission import PROFILE_PITCH, BeltPulley
 from ..errors import ProblemError
 from ..motion.laws import LAW_NAMES, LAW_PARAMETERS, MotionLaw, make_law
 from ..motion.timing import INTERVAL_TIMES, Interval, TimingDiagram
 from ..problem import Problem
+from ..servo.kernel import ServoErrorTerm
 from ..servo.settings import parse_servo
 from .fields import _REQUIRED, Fields, apply_overrides
 
@@ -90,6 +91,7 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
         drive=drive,
         design=design,
         servo=servo,
+        error_terms=(ServoErrorTerm(),) if servo is not None else (),
     )
 
 

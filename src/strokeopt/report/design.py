@@ -1,12 +1,17 @@
-"""Design results: mesh-study and stitch-rate sweep figures (and text tables)."""
+"""Design results: the text account of a design (:func:`design_text`), the JSON summary of
+``strokeopt solve`` (:func:`design_summary`), and the mesh-study and stitch-rate sweep figures."""
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
+from .format import format_table, format_value
+from ..design.result import Design, move_direction
+from ..design.settings import DesignSettings
 
 
 def plot_mesh_study(rows: list[dict], path=None):
     """Work-precision of the design collocation: objective error and violation between nodes vs solve time."""
+    import matplotlib.pyplot as plt  # here: text reports do not import matplotlib
+
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
     for degree in sorted({r["degree"] for r in rows}):
         sel = [r for r in rows if r["degree"] == degree and not r.get("reference")]
@@ -33,6 +38,8 @@ def plot_mesh_study(rows: list[dict], path=None):
 
 def plot_design_sweep(rows: list[dict], path=None):
     """Optimal objective (and peak torque) over the stitch rate of a design sweep; infeasible rates marked."""
+    import matplotlib.pyplot as plt
+
     fig, ax = plt.subplots(figsize=(8, 4), constrained_layout=True)
     ok = [r for r in rows if r["feasible"]]
     bad = [r for r in rows if not r["feasible"]]
@@ -51,3 +58,90 @@ def plot_design_sweep(rows: list[dict], path=None):
         fig.savefig(path, dpi=120)
         plt.close(fig)
     return fig
+
+
+def feasible_text(row: dict) -> str:
+    """``yes``, or ``no: `` and the constraints a comparison row breaks."""
+    return "yes" if row.get("feasible", True) else "no: " + ", ".join(row.get("violates") or ["?"])
+
+
+def _pulley_text(design: Design) -> str:
+    return (f"{design.pulley_teeth} teeth" if design.pulley_teeth is not None
+            else "continuous radius (design.pulley = \"continuous\": no catalogue tooth count)")
+
+
+def design_text(design: Design, comparison: list[dict] | None = None) -> str:
+    """A readable account of a design: choices, objective, moves, checks with margins, active constraints."""
+    lines = [f"{design.problem.name}: optimal stroke at {design.spm:g} spm ({design.status}, "
+             f"{design.solve_time_s:.2f} s, mesh {design.mesh.intervals} x degree {design.mesh.degree})",
+             f"objective {design.objective}: {format_value(design.objective_value)} {design.objective_unit}"]
+    if design.motor is not None:
+        lines.append(f"motor {design.motor}; pulley {_pulley_text(design)}, pitch diameter "
+                     f"{design.pitch_diameter * 1e3:.2f} mm")
+    lines.append("")
+    lines.append(format_table([m.to_dict() for m in design.moves],
+                              [("index", "move"), ("name", "interval"), ("stroke_mm", "stroke mm"),
+                               ("direction", "direction"),
+                               ("duration_s", "time s"), ("v_max_m_s", "v_max m/s"), ("a_max_m_s2", "a_max m/s2"),
+                               ("jerk_max_m_s3", "jerk_max m/s3"), ("C_a", "C_a")]))
+    if design.checks:
+        lines.append("")
+        lines.append(format_table(design.checks, [("name", "check"), ("value", "value"), ("limit", "limit"),
+                                                  ("unit", "unit"), ("margin", "margin"), ("ok", "ok")],
+                                  title=f"checks (fine grid between collocation nodes; margin = 1 - value/limit; ok: "
+                                        f"within the limit + check_tolerance "
+                                        f"{100 * (design.settings or DesignSettings()).check_tolerance:g} %)"))
+    lines.append("")
+    lines.append("active constraints: " + ("; ".join(design.active_constraints) or "none"))
+    if comparison:
+        cols = [("law", "stroke"), ("a_max_m_s2", "a_max m/s2"), ("jerk_max_m_s3", "jerk_max m/s3")]
+        if "peak_torque_N_m" in comparison[0]:
+            cols += [("peak_torque_N_m", "peak torque N m"), ("rms_torque_N_m", "RMS torque N m")]
+        cols.append(("vs_optimal_pct", f"{design.objective} vs optimal %"))
+        cols.append(("feasible_text", "feasible"))
+        lines.append("")
+        motor = f" with {design.motor}, {_pulley_text(design)}" if design.motor else ""
+        shown = [{**r, "feasible_text": feasible_text(r)} for r in comparison]
+        lines.append(format_table(shown, cols, title=f"comparison with the classic laws{motor}"))
+        if any(not r.get("feasible", True) for r in comparison):
+            lines.append("laws marked 'no' break the problem's constraints (listed last): a lower value there "
+                         "does not beat the optimum")
+        beaten = [r for r in comparison[1:] if r.get("feasible", True) and (r.get("vs_optimal_pct") or 0.0) < 0]
+        if beaten:
+            lines.append(f"{beaten[0]['law']} is {-beaten[0]['vs_optimal_pct']:.3g} % below the optimal stroke and "
+                         f"feasible: the collocation mesh resolves the optimum only to about that accuracy (this "
+                         f"law may itself be the exact optimum); `strokeopt solve --study mesh` shows the error "
+                         f"against the mesh size")
+        if comparison[0].get("peak_torque_N_m") is not None and design.checks and any(
+                c["name"].startswith("handover accuracy") for c in design.checks):
+            lines.append("feasible: rest order, jerk bound and drive checks; the laws' handover accuracy is not "
+                         "checked")
+    for note in design.notes:
+        lines.append(f"note: {note}")
+    return "\n".join(lines)
+
+
+def design_summary(design: Design) -> dict:
+    """The JSON report of ``strokeopt solve``: the fields scripts rely on, then the details."""
+    checks = {c["name"]: c for c in design.checks}
+    out = {
+        "status": design.status,
+        "objective": design.objective,
+        "objective_value": design.objective_value,
+        "objective_unit": design.objective_unit,
+        "motor": design.motor,
+        "pulley_teeth": design.pulley_teeth,
+        "spm": design.spm,
+        "peak_torque_N_m": checks["peak_torque"]["value"] if "peak_torque" in checks else None,
+        "rms_torque_N_m": checks["rms_torque"]["value"] if "rms_torque" in checks else None,
+        "moves": [{"index": m.index, "v_max_m_s": m.v_max, "a_max_m_s2": m.a_max, "jerk_max_m_s3": m.jerk_max,
+                   "C_a": m.C_a, "duration_s": m.duration, "stroke_mm": abs(m.stroke) * 1e3,
+                   "direction": move_direction(m.stroke)} for m in design.moves],
+        "active_constraints": design.active_constraints,
+        "solve_time_s": design.solve_time_s,
+    }
+    full = design.summary()
+    for key in ("problem", "problem_file", "cycle_time_s", "pulley_pitch_diameter_mm", "mesh", "checks",
+                "iterations", "notes"):
+        out[key] = full[key]
+    return out

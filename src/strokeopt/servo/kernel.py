@@ -1,15 +1,18 @@
 """The servo's term of the design's handover-accuracy constraint (an exact linear functional of the move
-accelerations)."""
+accelerations): :class:`ServoErrorTerm`, passed to the design as one of ``Problem.error_terms``.
+
+The design does not import this module: the problem file (:mod:`strokeopt.io.problem_file`) gives the
+term to a problem with a ``[servo]`` section, and :func:`strokeopt.design.solve.solve_design` takes it
+from there (or from its ``error_terms`` argument)."""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
-from pathlib import Path
+from dataclasses import dataclass, replace
+from typing import ClassVar
 
 import numpy as np
 
-from ..drive.sizing import bisect_highest
 from ..errors import ProblemError, SolverError
 from .accuracy import handover_accuracy
 from .loop import Gains, build_loop, tuned_gains as _tuned
@@ -86,10 +89,11 @@ def error_kernel(axis: DriveAxis, settings: ServoSettings, gains: Gains, period:
 KERNEL_POINTS = 6
 
 
-def servo_handover_error(ctx):
-    """Handover error term of the design (``design.HANDOVER_ERROR_TERMS``): the bar's error at the
-    end of the handover move (:data:`WINDOW_POINTS`) from the servo loop and the belt,
-    ``|e_motion + e_load| + one count``.
+@dataclass(frozen=True)
+class ServoErrorTerm:
+    """The servo's handover error term of the design (a :class:`strokeopt.design.request.ErrorTerm`):
+    the bar's error at the end of the handover move (:data:`WINDOW_POINTS`) from the servo loop and
+    the belt, ``|e_motion + e_load| + one count``.
 
     ``e_motion`` is exact for the linear loop (continuous reference): a linear
     functional of the move accelerations (:class:`ErrorKernel`), the weights
@@ -98,43 +102,55 @@ def servo_handover_error(ctx):
     simulation of the problem's classic stroke at the same speed. With a
     continuous pulley radius or a motor choice the kernel is that of the
     problem's own pulley and motor (an approximation; re-check the result with
-    ``strokeopt accuracy``). None when the problem has no ``[servo]`` section.
+    ``strokeopt accuracy``). The term has no parameters: it reads ``problem.servo`` at
+    solve time (no term when the problem has no ``[servo]`` section). The problem file gives
+    it to every problem with a ``[servo]`` section (``Problem.error_terms``).
     """
-    import casadi as ca
 
-    problem = ctx.problem
-    settings = getattr(problem, "servo", None)
-    if settings is None or ctx.drive is None or not ctx.moves or "spm" not in ctx.extra:
+    name: ClassVar[str] = "servo loop and belt"
+
+    def fixed_error(self, problem) -> float | None:
+        """No part of this term is independent of the design (speed, motor and pulley set all of it)."""
         return None
-    if problem.timing.handover_move is None:
-        return None
-    x_q = (np.polynomial.legendre.leggauss(KERNEL_POINTS)[0] + 1) / 2
-    b = ctx.built
-    n = ctx.mesh.intervals
-    errors = 0
-    for k, mv in enumerate(ctx.moves):
-        w_sym = b.params(f"servo kernel move {mv.index}", lambda c, k=k: _servo_numbers(c)["weights"][k],
-                         (WINDOW_POINTS + 1, n * KERNEL_POINTS))
-        a = ca.vec(ctx.si(k, x_q, "a"))  # column-major: the same order as the kernel's sigma
-        errors = errors + ca.mtimes(w_sym, a)
-    load = b.param("servo load error", lambda c: _servo_numbers(c)["load"])
-    quant = b.param("servo encoder count", lambda c: _servo_numbers(c)["count"])
-    e = errors + load
-    return "servo loop and belt (servo.py)", ca.mmax(ca.sqrt(e**2 + 1e-14)) + quant
+
+    def expression(self, nlp):
+        """The error [m] in the NLP under construction, or None without ``[servo]``, drive or handover move."""
+        import casadi as ca
+
+        req = nlp.request
+        problem = req.problem
+        if getattr(problem, "servo", None) is None or req.drive is None or not req.moves:
+            return None
+        if problem.timing.handover_move is None:
+            return None
+        x_q = (np.polynomial.legendre.leggauss(KERNEL_POINTS)[0] + 1) / 2
+        b = nlp.built
+        n = req.mesh.intervals
+        errors = 0
+        for k, mv in enumerate(req.moves):
+            w_sym = b.params(f"servo kernel move {mv.index}", lambda r, k=k: _servo_numbers(r)["weights"][k],
+                             (WINDOW_POINTS + 1, n * KERNEL_POINTS))
+            a = ca.vec(nlp.si(k, x_q, "a"))  # column-major: the same order as the kernel's sigma
+            errors = errors + ca.mtimes(w_sym, a)
+        load = b.param("servo load error", lambda r: _servo_numbers(r)["load"])
+        quant = b.param("servo encoder count", lambda r: _servo_numbers(r)["count"])
+        e = errors + load
+        return ca.mmax(ca.sqrt(e**2 + 1e-14)) + quant
 
 
-def _servo_numbers(ctx) -> dict:
-    """The numbers of :func:`servo_handover_error` for one solve (speed, motor, pulley): kernel weights
-    per move, load error, encoder count. Computed once per solve (``ctx.extra["cache"]``)."""
-    cache = ctx.extra["cache"]
+def _servo_numbers(req) -> dict:
+    """The numbers of :class:`ServoErrorTerm` for one solve (speed, motor, pulley): kernel weights
+    per move, load error, encoder count. Computed once per solve (``req.cache``, the solve's
+    :class:`~strokeopt.design.request.SolveRequest`)."""
+    cache = req.cache
     if "servo" in cache:
         return cache["servo"]
-    problem = ctx.problem
+    problem = req.problem
     settings = problem.servo
-    spm = float(ctx.extra["spm"])
+    spm = float(req.spm)
     timing = problem.timing
     move_h = timing.handover_move
-    choice = ctx.choice
+    choice = req.choice
     motor = choice.motor if choice is not None and choice.motor is not None else None
     teeth = choice.teeth if choice is not None and choice.teeth is not None else problem.pulley_teeth
     axis = axis_from_problem(problem, settings, motor=motor, pulley_teeth=teeth)
@@ -148,9 +164,9 @@ def _servo_numbers(ctx) -> dict:
                                 WINDOW_POINTS + 1)
     x_q, w_q = np.polynomial.legendre.leggauss(KERNEL_POINTS)
     x_q, w_q = (x_q + 1) / 2, w_q / 2
-    n = ctx.mesh.intervals
+    n = req.mesh.intervals
     weights = []
-    for mv in ctx.moves:
+    for mv in req.moves:
         t0 = float(sch.t_start[mv.interval - 1])
         dur = float(sch.duration[mv.interval - 1])
         sigma = (t0 + (np.arange(n).reshape(-1, 1) + x_q.reshape(1, -1)) * dur / n).ravel(order="F")
@@ -168,29 +184,21 @@ def _servo_numbers(ctx) -> dict:
 WINDOW_POINTS = 0
 
 
+#: Load errors by the values that determine them (timing, axis, servo settings, gains, speed); bounded.
 _LOAD_ERRORS: dict = {}
-
+_LOAD_ERRORS_SIZE = 32
 
 
 def _load_error(problem, settings: ServoSettings, axis: DriveAxis, gains: Gains, spm: float) -> float:
     """Bar error at the end of the handover move caused by the load forces alone (classic stroke, this speed)."""
-    key = (id(problem), axis, settings, gains, spm)
+    key = (problem.timing, axis, settings, gains, spm)
     if key not in _LOAD_ERRORS:
         if axis.load is None:
-            _LOAD_ERRORS[key] = 0.0
+            value = 0.0
         else:
             res = handover_accuracy(problem, spm=spm, settings=settings, axis=axis, gains=gains)
-            _LOAD_ERRORS[key] = res.at_handover(res.error_load)
+            value = res.at_handover(res.error_load)
+        if len(_LOAD_ERRORS) >= _LOAD_ERRORS_SIZE:
+            _LOAD_ERRORS.pop(next(iter(_LOAD_ERRORS)))
+        _LOAD_ERRORS[key] = value
     return _LOAD_ERRORS[key]
-
-
-def _register_design_term() -> None:
-    from ..design import solve as design
-
-    if servo_handover_error not in design.HANDOVER_ERROR_TERMS:
-        design.HANDOVER_ERROR_TERMS.append(servo_handover_error)
-
-
-_register_design_term()
-
-

@@ -146,7 +146,8 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
     motor and pulley are the problem's (``drive.motor``, ``pulley_teeth``), as
     for the classic law, so the two curves compare strokes on one drive.
     """
-    from ..design.solve import DesignSettings, solve_design
+    from ..design.settings import DesignSettings
+    from ..design.solve import solve_design
 
     accuracies = sorted(a * 1e-3 for a in DEFAULT_ACCURACIES_MM) if accuracies is None else sorted(accuracies)
     base = problem.design or DesignSettings()

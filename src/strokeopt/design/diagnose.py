@@ -1,0 +1,71 @@
+"""Why a design cannot be solved: the limit that cannot be met, and by how much.
+
+Called by :mod:`.refine` when IPOPT fails: the same NLP is built relaxed (every limit group
+``expr <= sigma``, the total excess minimised; :class:`~.nlp.Built`), and the worst excess is
+named in the words of its :class:`~.limits.LimitGroup` (a :class:`~strokeopt.errors.SolverError`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from .limits import LimitGroup
+from .nlp import prepare
+from .request import SolveRequest
+from .solver import STATUS_OK, solve_nlp
+from ..errors import SolverError
+
+
+def diagnose(req: SolveRequest, status: str) -> SolverError:
+    """Why the solve of ``req`` failed: relax every limit group of its NLP, minimise the total excess, name the worst."""
+    spm, choice, options = req.spm, req.choice, req.options
+    where = f" for motor {choice.motor.name}" if choice is not None and choice.motor is not None else ""
+    try:
+        nlp = prepare(replace(req, warm=None, relaxed=True, pin_times=None))
+        opts = {k: v for k, v in options.items() if k != "plugin"}
+        sol, stats, _ = solve_nlp(nlp, opts)
+    except (RuntimeError, ValueError) as exc:  # pragma: no cover - a relaxed problem is always feasible
+        return SolverError(f"the design problem at {spm:g} spm{where} could not be solved (IPOPT: {status}; {exc})")
+    if str(stats.get("return_status")) not in STATUS_OK:
+        return SolverError(f"the design problem at {spm:g} spm{where} could not be solved (IPOPT: {status}); "
+                           f"even with every limit relaxed: check the timing and the rest conditions")
+    x = np.asarray(sol["x"]).ravel()
+    violated = []  # (relative excess, limit group, slack), worst first
+    for lim, slack in nlp.built.limits:
+        sig = float(nlp.value(slack, x).item()) if slack is not None and lim.is_enforced(nlp.request) else 0.0
+        if sig > 1e-6:
+            need = lim.need(sig)
+            violated.append((need / lim.limit - 1 if lim.limit else math.inf, lim, need))
+    if not violated:
+        hint = (f"raise the iteration limit ({options.get('ipopt.max_iter')}: [design.solver] "
+                f"\"ipopt.max_iter\" = 1000), " if status == "Maximum_Iterations_Exceeded" else "")
+        return SolverError(f"IPOPT did not converge at {spm:g} spm{where} ({status}) although the limits can be met: "
+                           f"{hint}try more mesh intervals, or --verbose to see the solver log")
+    violated.sort(key=lambda v: -v[0])
+    excess, lim, need = violated[0]
+    subject = f"move {lim.move} too short" if lim.move is not None else "the design cannot meet the limits"
+    motor = f" for motor {choice.motor.name}" if choice is not None and choice.motor is not None else ""
+    lines = [f"{subject}{motor} at {spm:g} spm: {need_text(lim, need, lim.what)}"]
+    seen = {lim.name}
+    for _, other, other_need in violated[1:]:
+        if other.name not in seen and len(seen) < 5:
+            seen.add(other.name)
+            where_ = f" (move {other.move})" if other.move is not None else ""
+            lines.append(f"  also{where_}: {need_text(other, other_need, other.what)}")
+    err = SolverError("\n".join(lines))
+    err.excess = excess  # relative excess of the worst limit: ranks the motors of a catalogue search
+    err.short = need_text(lim, need, lim.short)
+    return err
+
+
+def need_text(lim: LimitGroup, need: float, name: str) -> str:
+    """``<name> needs X <unit>, limit Y <unit> (Z % over)``: a violated limit group and by how much."""
+    over = f" ({100 * (need / lim.limit - 1):.1f} % over)" if lim.limit else ""
+    unit, shown_need, shown_lim = lim.unit, need, lim.limit
+    if unit == "m":
+        shown_need, shown_lim, unit = need * 1e3, lim.limit * 1e3, "mm"
+    unit = "" if unit == "-" else f" {unit}"
+    return f"{name} needs {shown_need:.4g}{unit}, limit {shown_lim:.4g}{unit}{over}"

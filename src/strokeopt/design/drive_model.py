@@ -1,0 +1,156 @@
+"""The drive in the NLP: pulley radius, motor, and the motor torque and belt force of every move and dwell.
+
+Built by :func:`.limits.build_drive` before the limits that read it (drive.py's load model,
+:func:`~strokeopt.drive.sizing.load_torque`, on CasADi symbols). The pulley radius is a
+decision variable scaled by a reference radius: free between the catalogue's bounds, or held at a
+tooth count's radius by equal bounds. A fixed pulley's inertia is its catalogue value: the inertia
+model times a parameter (catalogue / model). Both cases are one NLP structure, so one built
+solver serves the whole catalogue search. The motor is fixed (its numbers are parameters) or a
+Bonmin choice among candidates (binary weights).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from .pins import pin_rows
+from .request import SolveRequest
+from ..drive.transmission import BeltPulley
+
+
+def pulley_setting(req: SolveRequest) -> tuple[float, float, float, float]:
+    """This solve's pulley: radius bounds, start radius [m] and the inertia factor (catalogue / model)."""
+    drive, choice = req.drive, req.choice
+    if choice.teeth is not None:
+        pulley = drive.pulley(choice.teeth)
+        model = float(drive.pulley_inertia(pulley.pitch_diameter))
+        factor = (pulley.inertia / model if model > 0 else 0.0) if req.settings.include_pulley_inertia else 0.0
+        return pulley.radius, pulley.radius, pulley.radius, factor
+    lo, hi = choice.radius_bounds or drive.radius_bounds()
+    start = float(np.clip(req.radius0 if req.radius0 is not None else req.problem.transmission.radius, lo, hi))
+    return lo, hi, start, 1.0
+
+
+def peak_limit(motor, drive) -> float:
+    """The motor's peak torque, or the drive's overload limit if lower."""
+    return min(motor.peak_torque, drive.limits.peak_limit_pct / 100 * motor.rated_torque)
+
+
+@dataclass
+class DriveModel:
+    """The drive's symbols of one NLP structure (see the module docstring), for the limits and objectives."""
+
+    radius: Any
+    r_ref: float
+    inertia: Any  # of the pulley [kg m^2]
+    trans: BeltPulley
+    rotor: Any
+    peak_lim: Any  # torque limits and rated speed of the motor (parameters, or Bonmin mixtures)
+    rated: Any
+    speed: Any
+    peak_num: float  # the same for messages (a Bonmin choice: the loosest of the candidates)
+    rated_num: float
+    speed_num: float
+    motor_name: str
+    peak_what: str
+    tau_ref: float  # torque scale [N m]: the same for every motor, so one solver serves them all
+    period: Any
+    v: list = field(default_factory=list)  # speed at the hull points of each move [m/s]
+    forces: list = field(default_factory=list)  # belt forces of the moves, pins and dwells [N]
+    pin_values: list = field(default_factory=list)  # pinned torques and forces relative to their limits
+    pin_forces: list = field(default_factory=list)
+    sum_sq: Any = 0.0  # integral of (torque/tau_ref)^2 over the moves, divided by the period
+    dwell_sq: Any = 0.0
+
+    @classmethod
+    def build(cls, g) -> "DriveModel":
+        """The pulley radius and the motor of ``g``'s structure."""
+        b, req = g.built, g.request
+        drive, choice = req.drive, req.choice
+        lo, hi = drive.radius_bounds()
+        r_ref = float(np.sqrt(lo * hi))
+        rho = b.var("radius", (1, 1), lambda r: pulley_setting(r)[0] / r_ref,
+                    lambda r: pulley_setting(r)[1] / r_ref, lambda r: pulley_setting(r)[2] / r_ref)
+        radius = rho * r_ref
+        inertia = b.param("pulley inertia factor", lambda r: pulley_setting(r)[3]) * drive.pulley_inertia(2 * radius)
+        trans = BeltPulley(2 * radius, inertia)
+        pct = drive.limits.peak_limit_pct / 100
+        if choice.candidates:
+            cands = choice.candidates
+            pick = b.var("motor", (len(cands), 1), 0.0, 1.0, [1.0] + [0.0] * (len(cands) - 1))
+            b.constrain("one motor", ca.sum1(pick) - 1.0, 0.0, 0.0)
+            g.discrete, g.pick = ("motor", len(cands)), pick
+
+            def mix(values):
+                return ca.dot(pick, ca.DM(values))
+
+            rotor = mix([m.rotor_inertia for m in cands])
+            peak_lim = mix([peak_limit(m, drive) for m in cands])
+            rated = mix([m.rated_torque for m in cands])
+            speed = mix([m.rated_speed for m in cands])
+            # for messages: the loosest limits of the candidates
+            peak_num = max(peak_limit(m, drive) for m in cands)
+            rated_num = max(m.rated_torque for m in cands)
+            speed_num = max(m.rated_speed for m in cands)
+            motor_name = "any catalogue motor"
+        else:
+            m = choice.motor
+            rotor = b.param("rotor inertia", lambda r: r.choice.motor.rotor_inertia)
+            peak_num, rated_num, speed_num = peak_limit(m, drive), m.rated_torque, m.rated_speed
+            peak_lim = b.param("peak limit", lambda r: peak_limit(r.choice.motor, r.drive))
+            rated = b.param("rated torque", lambda r: r.choice.motor.rated_torque)
+            speed = b.param("rated speed", lambda r: r.choice.motor.rated_speed)
+            motor_name = m.name  # for messages: a relaxed build (which names them) is never reused
+        g.radius = radius
+        peak_what = (f"peak_torque (peak torque, {motor_name}: {'%.3g' % peak_num} N m"
+                     f"{', drive limit %g %% of rated' % drive.limits.peak_limit_pct if pct * (rated_num) < peak_num + 1e-12 and not choice.candidates else ''})")
+        period = b.param("period", lambda r: r.period)
+        return cls(radius, r_ref, inertia, trans, rotor, peak_lim, rated, speed, peak_num, rated_num, speed_num,
+                   motor_name, peak_what, drive.tau_ref, period)
+
+    def move(self, g, k: int) -> None:
+        """Torque (relative to ``tau_ref``) and belt force of move ``k``, with its pinned points."""
+        from ..drive.load import load_torque
+
+        mv = g.request.moves[k]
+        # Torque (linear in the acceleration) is held at the Bernstein control points of the
+        # acceleration polynomial (with position and speed at their Greville abscissae), not only at
+        # the nodes: the acceleration part is then bounded everywhere in the interval (convex hull),
+        # so the optimiser cannot hide a torque peak between two nodes.
+        greville = np.linspace(0.0, 1.0, g.request.mesh.degree + 1)
+        s = ca.vec(g.si(k, greville, "s")).T
+        v = ca.vec(g.vars[k].hull("v") * (mv.stroke / g.T[k])).T  # bounds the speed between nodes too
+        a = ca.vec(g.vars[k].hull("a") * (mv.stroke / g.T[k] ** 2)).T
+        terms = load_torque(self.rotor, self.trans, g.request.drive.load, s, 0 * s, a)
+        tau = terms.total / self.tau_ref
+        self.forces.append(terms.load_force)
+        # where a load force switches on inside the move the torque jumps: the pinned points (pins.py)
+        pin_t, pin_f = pin_rows(g, k, mv, self.rotor, self.trans)
+        tau = ca.horzcat(tau, pin_t / self.tau_ref)
+        self.forces.append(pin_f)
+        self.pin_values.append(ca.vec(pin_t) / self.peak_lim)
+        self.pin_forces.append(ca.vec(pin_f))
+        g.torques.append(tau)
+        self.v.append(v)
+
+    def dwells(self, g) -> None:
+        """The dwells: at rest, torque from gravity and load forces only."""
+        from ..drive.load import load_torque
+
+        b, req = g.built, g.request
+        sch = req.schedule
+        for itv, dur in zip(req.problem.timing.intervals, sch.duration):
+            if itv.is_move:
+                continue
+            terms = load_torque(self.rotor, self.trans, req.drive.load, ca.MX(itv.start_position), ca.MX(0.0),
+                                ca.MX(0.0))
+            t_d = terms.total / self.tau_ref
+            g.dwell_torques.append(t_d)
+            self.forces.append(terms.load_force)
+            share = b.param(f"dwell {itv.index} share",
+                            lambda r, i=itv.index - 1: r.schedule.duration[i] / r.schedule.period)
+            self.dwell_sq = self.dwell_sq + t_d**2 * share

@@ -1,0 +1,233 @@
+"""The limits of the design problem: one builder per limit.
+
+Each :class:`Limit` owns its NLP rows (:meth:`Limit.on_move`, :meth:`Limit.on_cycle`, as
+:class:`LimitGroup` s whose ``need`` and ``what`` make the message of :mod:`.diagnose`), the names of
+drive.py's checks that re-read it on the fine grid (:attr:`Limit.checks`: a violation there beyond
+``check_tolerance`` refines the mesh, see :mod:`.refine`) and its own rows of the checks table
+(:meth:`Limit.report`). A new limit is one new builder in :data:`MOVE_LIMITS` or
+:data:`DRIVE_LIMITS`. Built by :mod:`.nlp`; the drive's symbols they read come from
+:mod:`.drive_model`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from .drive_model import DriveModel
+
+
+@dataclass(frozen=True)
+class LimitGroup:
+    """A group of inequality constraints ``expr <= 0`` (scaled) with what it means in SI.
+
+    ``need(sigma)`` turns a relaxation ``expr <= sigma`` back into the SI value
+    the design would need; ``limit`` is the SI limit, ``what`` names it.
+    """
+
+    name: str
+    what: str
+    limit: float
+    unit: str
+    need: Any
+    move: int | None = None
+    check: str = ""  # the name of the same limit in the checks table (drive.py's names), for short messages
+    #: False, or a function of the solve's request returning False: the rows exist (one NLP
+    #: structure for every solve) but their bound is infinite
+    enforced: Any = True
+
+    @property
+    def short(self) -> str:
+        return self.check or self.what
+
+    def is_enforced(self, req) -> bool:
+        return bool(self.enforced(req) if callable(self.enforced) else self.enforced)
+
+
+class Limit:
+    """One kind of limit (see the module docstring); the base adds nothing."""
+
+    #: drive.py's checks (fine grid, whole cycle) that hold this limit
+    checks: tuple[str, ...] = ()
+
+    def on_move(self, g, k: int) -> None:
+        """Rows of move ``k`` (``g``: the :class:`~.nlp.Graph` under construction)."""
+
+    def on_cycle(self, g) -> None:
+        """Rows over the whole cycle, after every move."""
+
+    def report(self, nlp, outcome) -> list[dict]:
+        """Rows of the checks table besides drive.py's (name, value, limit, unit)."""
+        return []
+
+
+class JerkBound(Limit):
+    """|jerk| of each move within ``[design] jerk_max`` (or the file's law), everywhere (Bernstein hull)."""
+
+    def on_move(self, g, k):
+        mv, b, x = g.request.moves[k], g.built, g.vars[k]
+        if mv.jerk_bound is None:
+            return
+        # the bound on the unit jerk
+        jb = b.param(f"jerk bound {mv.index}", lambda r, k=k: r.moves[k].jerk_bound / r.moves[k].j_scale)
+        hull = x.hull("j") / jb  # Bernstein coefficients: bounds the jerk everywhere, not only at nodes
+        lim = LimitGroup(f"jerk bound move {mv.index}", "jerk bound", mv.jerk_bound, "m/s^3",
+                         lambda sig, jb=mv.jerk_bound: jb * (1 + sig), mv.index)
+        b.limit_abs(lim, hull)
+
+    def report(self, nlp, outcome):
+        return [{"name": f"jerk move {mv.index}", "value": row["jerk_max_fine_m_s3"], "limit": mv.jerk_bound,
+                 "unit": "m/s^3"}
+                for mv, row in zip(nlp.request.moves, outcome.fine["moves"]) if mv.jerk_bound is not None]
+
+
+class PeakTorque(Limit):
+    """|motor torque| within the motor's peak torque (or the drive's overload limit), moves and dwells."""
+
+    checks = ("peak_torque", "overload")
+
+    def on_move(self, g, k):
+        dm, mv = g.drive_model, g.request.moves[k]
+        lim = LimitGroup(f"peak torque move {mv.index}", dm.peak_what, dm.peak_num, "N m",
+                         lambda sig, pl=dm.peak_num, tr=dm.tau_ref: pl + sig * tr, mv.index, "peak_torque")
+        g.built.limit_abs(lim, g.torques[k] * (dm.tau_ref / dm.peak_lim))
+
+    def on_cycle(self, g):
+        dm = g.drive_model
+        if g.dwell_torques:
+            tau_d = ca.vertcat(*g.dwell_torques)
+            lim = LimitGroup("peak torque dwells", dm.peak_what + " holding in the dwells", dm.peak_num, "N m",
+                             lambda sig, pl=dm.peak_num, tr=dm.tau_ref: pl + sig * tr, None, "peak_torque")
+            g.built.limit_abs(lim, tau_d * (dm.tau_ref / dm.peak_lim))
+
+
+class Speed(Limit):
+    """|v| / r within the motor's rated speed."""
+
+    checks = ("peak_speed",)
+
+    def on_move(self, g, k):
+        dm, mv = g.drive_model, g.request.moves[k]
+        omega = dm.v[k] / dm.radius
+        rpm = 60 / (2 * math.pi)
+        lim = LimitGroup(f"speed move {mv.index}", f"peak_speed (motor speed, {dm.motor_name}: rated)",
+                         dm.speed_num * rpm, "rpm", lambda sig, sp=dm.speed_num * rpm: sp * (1 + sig), mv.index,
+                         "peak_speed")
+        g.built.limit_abs(lim, omega / dm.speed)
+
+
+class RmsTorque(Limit):
+    """RMS motor torque over the cycle within the rated torque; owns the integral of torque squared."""
+
+    checks = ("rms_torque",)
+
+    def on_move(self, g, k):
+        # integral of torque squared over the move (Gauss-Legendre points), accumulated along the
+        # move in a chain of variables, one link per mesh interval: a single sum over every node
+        # would make one dense Jacobian row (costly to differentiate)
+        from ..drive.load import load_torque
+
+        dm, b, mesh, mv = g.drive_model, g.built, g.request.mesh, g.request.moves[k]
+        x_q, w_q = mesh.quadrature
+        sq, vq, aq = (g.si(k, x_q, kind) for kind in ("s", "v", "a"))  # N x len(x_q)
+        tq = load_torque(dm.rotor, dm.trans, g.request.drive.load, sq, vq, aq).total / dm.tau_ref
+        per_interval = ca.mtimes(tq**2, ca.DM(w_q)) * (mesh.h * g.T[k] / dm.period)
+        Q = b.var(f"torque2 move {mv.index}", (mesh.intervals + 1, 1), -np.inf, np.inf, 0.0)
+        b.constrain(f"torque2 move {mv.index}", ca.vertcat(Q[0], Q[1:] - Q[:-1] - per_interval), 0.0, 0.0)
+        dm.sum_sq = dm.sum_sq + Q[-1]
+
+    def on_cycle(self, g):
+        dm = g.drive_model
+        g.move_sq = dm.sum_sq
+        g.mean_sq = dm.sum_sq + dm.dwell_sq  # (RMS torque / tau_ref)^2
+        lim = LimitGroup("RMS torque", f"rms_torque (RMS torque, {dm.motor_name}: rated torque)", dm.rated_num,
+                         "N m", lambda sig, r=dm.rated_num, tr=dm.tau_ref: math.sqrt(r**2 + sig * tr**2), None,
+                         "rms_torque")
+        g.built.limit(lim, g.mean_sq - (dm.rated / dm.tau_ref) ** 2)
+
+
+class BeltTension(Limit):
+    """The effective belt tension within what the belt checks allow (width and breaking, the one that binds)."""
+
+    checks = ("belt_width", "belt_breaking")
+
+    def on_cycle(self, g):
+        dm, req = g.drive_model, g.request
+        belt = req.drive.belt_limit(req.choice.teeth)
+        if belt is None:
+            return
+        # the tension the belt checks allow; said in the units of the check that binds (drive.py's names)
+        check, f_allow, belt_lim, belt_unit = belt
+        f_lim = g.built.param("belt force limit", lambda r: r.drive.belt_limit(r.choice.teeth)[1])
+        allf = ca.horzcat(*[ca.reshape(f, 1, -1) for f in dm.forces]) / f_lim
+        dm.pin_values += [f / f_lim for f in dm.pin_forces]
+        what = {"belt_width": "belt_width (width factor the belt tension requires)",
+                "belt_breaking": "belt_breaking (belt tension with safety factor, against the breaking load)"}[check]
+        lim = LimitGroup("belt tension", what, belt_lim, belt_unit, lambda sig, bl=belt_lim: bl * (1 + sig), None,
+                         check)
+        g.built.limit_abs(lim, allf)
+
+
+class InertiaRatio(Limit):
+    """Load/rotor inertia ratio: a constraint only when the radius is free (a chosen pulley is checked, not held)."""
+
+    def on_cycle(self, g):
+        dm, req = g.drive_model, g.request
+        if req.choice.candidates:
+            return
+        limits = req.drive.limits
+        reflected = dm.inertia + req.drive.load.moving_mass * dm.radius**2
+        lim = LimitGroup("inertia ratio", "inertia_ratio (load/rotor inertia ratio)", limits.max_inertia_ratio,
+                         "-", lambda sig, mr=limits.max_inertia_ratio: mr * (1 + sig), None, "inertia_ratio",
+                         enforced=lambda r: r.choice.teeth is None)
+        g.built.limit(lim, reflected / (dm.rotor * limits.max_inertia_ratio) - 1.0)
+
+
+class HandoverAccuracy(Limit):
+    """The sum of the request's handover error terms (:class:`~.request.ErrorTerm`) within ``accuracy``.
+
+    A lazy constraint: a term may sum over a whole move (a servo tracking error), which makes a
+    dense Hessian block that is costly to build and factorise. The solve runs without it, checks
+    it at the solution, and only if it is violated re-solves with it (``enforce_accuracy``).
+    """
+
+    def on_cycle(self, g):
+        req = g.request
+        terms = [(t.name, e) for t in req.error_terms for e in [t.expression(g)] if e is not None]
+        g.handover_terms = terms
+        total = sum(v for _, v in terms) if terms else 0.0
+        g.handover_total = total
+        if terms and isinstance(total, (ca.MX, ca.SX)) and req.enforce_accuracy:
+            acc = req.settings.accuracy
+            lim = LimitGroup("handover accuracy", "handover accuracy", acc, "m", lambda sig, ac=acc: ac * (1 + sig))
+            g.built.limit(lim, total / acc - 1.0)
+
+    def report(self, nlp, outcome):
+        return [{"name": f"handover accuracy ({name})", "value": value * 1e3,
+                 "limit": nlp.request.settings.accuracy * 1e3, "unit": "mm"}
+                for name, value in outcome.handover_values()]
+
+
+#: Limits of the kinematics, built with every move.
+MOVE_LIMITS = (JerkBound(),)
+#: Limits of the drive, built with a [drive] section, in this order.
+DRIVE_LIMITS = (PeakTorque(), Speed(), RmsTorque(), BeltTension(), InertiaRatio(), HandoverAccuracy())
+#: drive.py's checks the design holds: a fine-grid violation of one of them refines the mesh.
+ENFORCED_CHECKS = frozenset(c for lim in DRIVE_LIMITS for c in lim.checks)
+
+
+def build_drive(g) -> None:
+    """The drive's symbols (:class:`DriveModel`) and every drive limit, move by move then over the cycle."""
+    dm = g.drive_model = DriveModel.build(g)
+    for k in range(len(g.request.moves)):
+        dm.move(g, k)
+        for lim in DRIVE_LIMITS:
+            lim.on_move(g, k)
+    dm.dwells(g)
+    for lim in DRIVE_LIMITS:
+        lim.on_cycle(g)
+    g.pin_values = ca.vertcat(*dm.pin_values) if dm.pin_values else None

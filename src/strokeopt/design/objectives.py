@@ -1,0 +1,145 @@
+"""The objectives of the design: one function per objective, in :data:`REGISTRY`.
+
+Each builder takes the :class:`~.nlp.Graph` under construction (after the moves and the drive's
+limits, :mod:`.limits`), returns the scaled objective expression and sets on the graph how to turn
+its value back into SI (``unit``, ``transform``; ``objective_expr`` when the expression carries
+a smoothing term). Read by :mod:`.settings` (the choices of ``[design] objective``) and
+:mod:`.nlp`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import casadi as ca
+import numpy as np
+
+from ..errors import ProblemError
+
+#: Weight of the jerk-squared regularisation added to epigraph (peak) objectives.
+SMOOTHING = 1e-7
+
+
+def _smoothing(g):
+    """A tiny integral of jerk squared (unit form, relative to the 3-4-5 law's 720 per move).
+
+    A peak objective is set by one move; without this the moves that do not set the peak could
+    take any feasible shape. It changes the peak by far less than the solver tolerance matters.
+    """
+    return SMOOTHING * sum(x.integral("j") for x in g.vars) / 720.0
+
+
+def min_peak_accel(g):
+    moves, b = g.request.moves, g.built
+    a_ref = max(mv.a_scale for mv in moves)
+    z = b.var("peak_accel", (1, 1), 0.0, np.inf, 6.0 * max(mv.a_scale for mv in moves) / a_ref)
+    for mv, x, T in zip(moves, g.vars, g.T):
+        a = (abs(mv.stroke) / T**2 / a_ref) * x.hull("a")  # bounds the acceleration everywhere, not only at the nodes
+        b.constrain(f"peak accel epigraph move {mv.index}", ca.vertcat(ca.vec(z - a), ca.vec(z + a)), 0.0, np.inf)
+    g.unit, g.transform = "m/s^2", (lambda f, r: f * a_ref)
+    g.objective_expr = z
+    return z + _smoothing(g)
+
+
+def _integral_objective(kind: str, power: int, unit: str):
+    """The integral over the moves of the squared ``kind`` derivative."""
+
+    def build(g):
+        moves = g.request.moves
+        # integral over the move of (stroke/T^p * y^(k))^2 dt = stroke^2 / T^(2p-1) * integral over unit time
+        ref = max(mv.stroke**2 / mv.duration**power for mv in moves)
+        total = sum((mv.stroke**2 / T**power / ref) * x.integral(kind) for mv, x, T in zip(moves, g.vars, g.T))
+        g.unit, g.transform = unit, (lambda f, r: f * ref)
+        return total
+
+    return build
+
+
+def min_peak_torque(g):
+    # The epigraph bound is one value, held as a chain of equal copies, one per mesh interval:
+    # a single variable in every epigraph row would be a dense Jacobian column, which together
+    # with a dense row (an accuracy term summing over the whole move) makes CasADi's
+    # derivative generation slow.
+    b, mesh, moves = g.built, g.request.mesh, g.request.moves
+    tau_ref = g.drive_model.tau_ref
+    n = mesh.intervals
+    Z = b.var("peak_torque", (n * len(moves) + 1, 1), 0.0, np.inf, 1.0)
+    b.constrain("peak torque chain", Z[1:] - Z[:-1], 0.0, 0.0)
+    d1 = mesh.degree + 1
+    for k, (mv, tau) in enumerate(zip(moves, g.torques)):
+        zk = Z[k * n:(k + 1) * n]
+        zrow = ca.horzcat(ca.repmat(zk, d1, 1).T, ca.repmat(zk[0], 1, tau.shape[1] - n * d1))
+        b.constrain(f"peak torque epigraph move {mv.index}", ca.vertcat((zrow - tau).T, (zrow + tau).T),
+                    0.0, np.inf)
+    if g.dwell_torques:
+        tau_d = ca.vertcat(*g.dwell_torques)
+        b.constrain("peak torque epigraph dwells", ca.vertcat(Z[-1] - tau_d, Z[-1] + tau_d), 0.0, np.inf)
+    g.unit, g.transform = "N m", (lambda f, r: f * tau_ref)
+    g.objective_expr = Z[0]
+    return Z[0] + _smoothing(g)
+
+
+def min_rms_torque(g):
+    tau_ref = g.drive_model.tau_ref
+    g.unit, g.transform = "N m", (lambda f, r: math.sqrt(max(f, 0.0)) * tau_ref)
+    return g.mean_sq
+
+
+def min_energy(g):
+    tau_ref = g.drive_model.tau_ref
+    g.unit, g.transform = "N^2 m^2 s", (lambda f, r: f * tau_ref**2 * r.period)
+    return g.move_sq
+
+
+@dataclass(frozen=True)
+class Objective:
+    """An objective: what it minimises, whether it needs the drive, and its builder."""
+
+    name: str
+    description: str
+    needs_drive: bool
+    build: Callable
+
+
+REGISTRY = {o.name: o for o in (
+    Objective("min_peak_torque", "peak |motor torque| over the cycle (epigraph form)", True, min_peak_torque),
+    Objective("min_rms_torque", "RMS motor torque over the cycle", True, min_rms_torque),
+    Objective("min_energy", "copper losses over one cycle (integral of torque squared over the moves)", True,
+              min_energy),
+    Objective("min_peak_accel", "peak |acceleration| of the driven member over all moves (epigraph form)", False,
+              min_peak_accel),
+    Objective("min_accel_squared", "integral of acceleration squared over the moves", False,
+              _integral_objective("a", 3, "m^2/s^3")),
+    Objective("min_jerk", "integral of jerk squared over the moves", False, _integral_objective("j", 5, "m^2/s^5")),
+    Objective("min_snap", "integral of snap (4th derivative) squared over the moves", False,
+              _integral_objective("snap", 7, "m^2/s^7")),
+)}
+#: Every objective, with what it minimises.
+OBJECTIVES = {name: o.description for name, o in REGISTRY.items()}
+#: Objectives that need only the kinematics.
+KINEMATIC_OBJECTIVES = tuple(name for name, o in REGISTRY.items() if not o.needs_drive)
+#: Objectives that need the drive's load torque.
+TORQUE_OBJECTIVES = tuple(name for name, o in REGISTRY.items() if o.needs_drive)
+
+
+def needs_drive_error(problem, objective: str) -> ProblemError:
+    return ProblemError(str(problem.file), "design.objective",
+                        f"objective {objective!r} needs the drive (motor, load): add a [drive] section, or choose "
+                        f"one of {', '.join(KINEMATIC_OBJECTIVES)}")
+
+
+def unknown_objective_error(objective: str) -> ProblemError:
+    return ProblemError("--objective", "", f"{objective!r} is not one of {', '.join(OBJECTIVES)}")
+
+
+def build_objective(g):
+    """The scaled objective expression of ``g``'s request."""
+    objective = g.request.objective
+    found = REGISTRY.get(objective)
+    if found is None:
+        raise unknown_objective_error(objective)
+    if found.needs_drive and g.request.drive is None:
+        raise needs_drive_error(g.problem, objective)
+    return found.build(g)

@@ -1,0 +1,120 @@
+"""Choosing the parts: the motor (fixed, enumerated, or Bonmin) and the pulley (fixed, or the
+continuous radius then the nearest tooth counts).
+
+Sixth step of the design's flow (:mod:`.refine` -> parts -> :mod:`.solve`): every candidate is a
+:func:`~.refine.solve_one` of a variant of one :class:`~.request.SolveRequest`, without the
+handover error terms (they are checked once at the chosen design).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+from .refine import Outcome, solve_one
+from .request import DriveChoice, SolveRequest
+from ..errors import ProblemError, SolverError
+
+
+def choose_parts(req: SolveRequest, progress=None):
+    """Motor (fixed, enumerated, or Bonmin) and pulley (fixed, or continuous radius then nearest tooth counts).
+
+    Enumeration prunes: the continuous-radius optimum of a motor is a lower bound of its
+    tooth-count optima, so a motor whose continuous optimum is no better than the best
+    design found so far is not solved for tooth counts.
+    """
+    problem, spm, settings, drive, options = req.problem, req.spm, req.settings, req.drive, req.options
+    objective, warm, radius0 = req.objective, req.warm, req.radius0
+    req = replace(req, error_terms=())  # the handover accuracy is checked at the chosen design (solve.py)
+    notes = []
+    if settings.motor_choice == "bonmin":
+        cands = tuple(drive.motors())
+        bonmin_opts = {k: v for k, v in options.items() if k not in ("ipopt.max_iter",)}
+        bonmin_opts["plugin"] = "bonmin"
+        try:
+            first = solve_one(replace(req, choice=DriveChoice(
+                None, None if settings.pulley != "fixed" else problem.pulley_teeth,
+                drive.radius_bounds() if settings.pulley != "fixed" else None, cands), options=bonmin_opts))
+        except SolverError as exc:
+            raise SolverError(f"no motor of the catalogue meets the limits at {spm:g} spm (Bonmin): {exc.reason}") from None
+        motors = [first.motor]
+        notes.append(f"motor chosen by Bonmin among {len(cands)} candidates (a heuristic for this non-convex problem)")
+    elif settings.motor_choice == "enumerate":
+        motors = drive.motors()
+    else:
+        motors = [drive.fixed_motor()]
+    failures = []
+    # phase 1: every motor with its own best pulley radius (continuous), or the fixed pulley
+    first_pass = []
+    for motor in (progress(motors) if progress is not None and len(motors) > 1 else motors):
+        try:
+            if settings.pulley == "fixed":
+                out = solve_one(replace(req, choice=DriveChoice(motor, problem.pulley_teeth), warm=warm,
+                                        radius0=None))
+            else:
+                out = solve_one(replace(req, choice=DriveChoice(motor, None, drive.radius_bounds()), warm=warm,
+                                        radius0=radius0))
+                radius0 = out.radius
+            warm = out.sols
+            first_pass.append((out, motor))
+        except SolverError as exc:
+            failures.append((motor, exc))
+    total_time = sum(o.solve_time for o, _ in first_pass)
+    # phase 2: tooth counts next to the continuous optimum, best lower bounds first
+    results = []
+    if settings.pulley in ("fixed", "continuous"):
+        results = [(o, problem.pulley_teeth if settings.pulley == "fixed" else None) for o, _ in first_pass]
+    else:
+        for cont, motor in sorted(first_pass, key=lambda r: r[0].value):
+            if results and cont.value >= min(r[0].value for r in results):
+                continue
+            try:
+                out, teeth = nearest_teeth(req, motor, cont)
+                results.append((out, teeth))
+                total_time += out.solve_time
+            except SolverError as exc:
+                failures.append((motor, exc))
+    if not results:
+        if len(failures) == 1:
+            raise failures[0][1]
+        # the motor that comes closest first; one line per motor after it
+        failures.sort(key=lambda f: getattr(f[1], "excess", math.inf))
+        m0, e0 = failures[0]
+        lines = [f"no motor of the catalogue can drive this design at {spm:g} spm; closest {m0.name}: "
+                 f"{getattr(e0, 'short', e0.reason.splitlines()[0])}"]
+        lines += [f"  {m.name}: {getattr(e, 'short', e.reason.splitlines()[0])}" for m, e in failures]
+        raise SolverError("\n".join(lines))
+    best, teeth = min(results, key=lambda r: r[0].value)
+    if len(motors) > 1:
+        notes.append(f"motor chosen among {len(motors)} by enumeration ({len(failures)} infeasible): "
+                     f"lowest {objective}")
+    best.solve_time = total_time
+    return best, teeth, notes
+
+
+def nearest_teeth(req: SolveRequest, motor, cont: Outcome):
+    """Re-solve with the tooth counts either side of the continuous optimum; keep the better."""
+    drive = req.drive
+    from ..drive.transmission import PROFILE_PITCH
+
+    z = 2 * math.pi * cont.radius / PROFILE_PITCH[drive.profile]
+    available = [p.teeth for p in drive.catalogue.pulleys_of(drive.profile, *drive.teeth_range)]
+    if not available:
+        raise ProblemError(drive.file, "design.pulley_teeth_min", f"the catalogue has no {drive.profile} pulley "
+                                                                  f"with {drive.teeth_range[0]}-{drive.teeth_range[1]} teeth")
+    below = [n for n in available if n <= z]
+    above = [n for n in available if n >= z]
+    candidates = sorted({max(below) if below else min(available), min(above) if above else max(available)})
+    best, failures = None, []
+    for teeth in candidates:
+        try:
+            out = solve_one(replace(req, choice=DriveChoice(motor, teeth), warm=cont.sols, radius0=None))
+        except SolverError as exc:
+            failures.append(exc)
+            continue
+        if best is None or out.value < best[0].value:
+            best = (out, teeth)
+    if best is None:
+        raise failures[0]
+    best[0].continuous_radius = cont.radius
+    return best

@@ -1,0 +1,145 @@
+"""One solve with fixed parts, refined until the fine grid and the pinned points agree with it.
+
+Fifth step of the design's flow (:mod:`.nlp`, :mod:`.solver` -> refine -> :mod:`.parts`,
+:mod:`.solve`). :func:`solve_one` solves the NLP of a :class:`~.request.SolveRequest`; moves the
+pinned points of the load switches (:mod:`.pins`) to the solution's crossings and re-solves until
+they stay in place; re-solves with the handover accuracy enforced if the solution violates it
+(a lazy constraint, :class:`~.limits.HandoverAccuracy`); then reads the solution on the fine grid
+(:mod:`.fine_grid`) and doubles the mesh where a limit is exceeded between the nodes. A failed
+solve raises the diagnosis of :mod:`.diagnose`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, replace
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from .collocation import Mesh
+from .diagnose import diagnose
+from .fine_grid import drive_checks_fine, fine_grid_report
+from .limits import ENFORCED_CHECKS
+from .nlp import Nlp, prepare
+from .pins import pin_intervals, pin_times, pins_fit
+from .request import SolveRequest
+from .solver import STATUS_OK, solve_nlp
+
+#: Re-solves that move the pinned points at most, per mesh.
+PIN_ITERATIONS = 5
+
+
+@dataclass
+class Outcome:
+    """One solve's answer: the NLP it solved, the solution, the objective [SI] and the fine-grid report."""
+
+    nlp: Nlp
+    x: np.ndarray
+    sols: list
+    value: float
+    status: str
+    solve_time: float
+    iterations: int
+    fine: dict
+    radius: float | None = None
+    motor: Any = None
+    continuous_radius: float | None = None
+    #: the handover error terms evaluated at the solution ((name, error [m]); None: read them from the NLP)
+    handover: list | None = None
+
+    def handover_values(self) -> list[tuple[str, float]]:
+        """(name, error [m]) of every handover error term at the solution."""
+        if self.handover is not None:
+            return self.handover
+        return [(name, float(value) if isinstance(value, (int, float)) else float(self.nlp.value(value, self.x).item()))
+                for name, value in self.nlp.graph.handover_terms]
+
+
+def objective_value(nlp: Nlp, sol, x) -> float:
+    """The objective without the smoothing term (scaled)."""
+    expr = nlp.graph.objective_expr
+    return float(sol["f"]) if expr is None else float(nlp.value(expr, x).item())
+
+
+def pins_in_place(nlp: Nlp, x: np.ndarray, new: dict) -> bool:
+    """Whether the pinned points of ``nlp`` may stay where they are for the solution ``x``.
+
+    ``new`` holds the solution's own crossing times. Moving the pins there must keep them in
+    their windows (the NLP's structure, see pins.py) and change the torque and belt force they hold by less than a tenth
+    of ``check_tolerance`` of the limits (the fine grid re-reads the true values after the
+    solve). A move that does not set a limit can shift its crossing freely without a re-solve.
+    """
+    req = nlp.request
+    old = req.pin_times
+    if all((new.get(key) is None) == (old.get(key) is None) and (new.get(key) is None or new[key] == old[key])
+           for key in new):
+        return True
+    moved = replace(req, pin_times=new)
+    if not pins_fit(nlp.graph.pins, pin_intervals(moved), req.mesh) or nlp.graph.pin_values is None:
+        return False
+    expr = nlp.graph.pin_values
+    before = nlp.value(expr, x).ravel()
+    after = np.asarray(ca.Function("pins", [ca.vertcat(*nlp.built.w), ca.vertcat(*nlp.built.p)], [expr])(
+        x, nlp.built.numbers(moved).p)).ravel()
+    return bool(np.max(np.abs(after - before), initial=0.0) <= req.settings.check_tolerance / 10)
+
+
+def solve_one(req: SolveRequest) -> Outcome:
+    """One NLP with fixed parts (or a continuous radius / a Bonmin motor), refined where the fine grid demands."""
+    settings, choice, drive = req.settings, req.choice, req.drive
+    total_time, iterations = 0.0, 0
+    warm, mesh = req.warm, req.mesh
+    for attempt in range(settings.refinements + 1):
+        pins = None
+        enforce = False
+        for _ in range(PIN_ITERATIONS):
+            t0 = time.perf_counter()
+            nlp = prepare(replace(req, mesh=mesh, warm=warm, pin_times=pins,
+                                  enforce_accuracy=enforce and bool(req.error_terms)))
+            sol, stats, _ = solve_nlp(nlp, req.options)
+            total_time += time.perf_counter() - t0
+            iterations += int(stats.get("iter_count", 0) or 0)
+            status = str(stats.get("return_status", "unknown"))
+            ok = stats.get("success", False) if choice is not None and choice.candidates else status in STATUS_OK
+            if not ok:
+                raise diagnose(nlp.request, status)
+            x = np.asarray(sol["x"]).ravel()
+            sols = nlp.unpack(x)
+            new = pin_times(nlp.request, nlp.graph.pins, sols)
+            total = nlp.graph.handover_total
+            violated = (not enforce and isinstance(total, (ca.MX, ca.SX))
+                        and float(nlp.value(total, x).item()) > settings.accuracy)
+            if not violated and pins_in_place(nlp, x, new):
+                break
+            pins, warm, enforce = new, sols, enforce or violated
+        fine, _ = fine_grid_report(nlp.request.moves, sols, settings.check_points)
+        radius = motor = None
+        worst = fine["worst_relative_violation"]
+        if drive is not None:
+            radius = float(nlp.value(nlp.graph.radius, x).item())
+            motor = choice.motor
+            if choice.candidates:
+                pick = nlp.value(nlp.graph.pick, x).ravel()
+                motor = choice.candidates[int(np.argmax(pick))]
+            checks = drive_checks_fine(drive, motor, choice.teeth, radius, req.problem, req.spm, nlp.request.moves,
+                                       sols, settings.check_points)
+            over = [max(0.0, -c.margin) for c in checks if c.name in ENFORCED_CHECKS and math.isfinite(c.margin)]
+            if req.objective == "min_peak_torque":  # the epigraph held at the nodes; the fine grid reads the peak
+                nlp_peak = nlp.graph.transform(objective_value(nlp, sol, x), nlp.request)
+                fine_peak = next(c.value for c in checks if c.name == "peak_torque")
+                fine["peak_torque_nodes_N_m"] = nlp_peak
+                fine["peak_torque_fine_N_m"] = fine_peak
+                over.append(max(0.0, fine_peak / nlp_peak - 1.0))
+            worst = max([worst] + over)
+            fine["drive_checks"] = [c.as_dict() for c in checks]
+            fine["worst_relative_violation"] = worst
+        if worst <= settings.check_tolerance or attempt == settings.refinements:
+            break
+        mesh = Mesh(mesh.intervals * 2, mesh.degree)
+        warm = None
+    value = nlp.graph.transform(objective_value(nlp, sol, x), nlp.request)
+    return Outcome(nlp, x, sols, value, "optimal" if status == "Solve_Succeeded" else "acceptable", total_time,
+                   iterations, fine, radius, motor)

@@ -1,0 +1,269 @@
+"""What one solve needs, as one object: :class:`SolveRequest`.
+
+Second step of the design's flow (:mod:`.settings` -> request -> :mod:`.nlp` -> :mod:`.refine`
+-> :mod:`.solve`). A request names the problem, the stitch rate, the settings, the mesh, the
+objective, the drive (:class:`DriveSetup`) and the parts of this solve (:class:`DriveChoice`),
+the solver options, the warm start, the pinned points and the handover error terms
+(:class:`ErrorTerm`). The NLP's parameter, bound and start-value functions read the request of
+the solve they serve; variants of a request are made with :func:`dataclasses.replace`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any, Protocol
+
+import numpy as np
+
+from .collocation import Mesh
+from .settings import DesignSettings
+from ..drive.transmission import BeltPulley
+from ..errors import ProblemError
+from ..motion.laws import make_law
+
+
+@dataclass(frozen=True)
+class Move:
+    """One move of the timing diagram as the design sees it (SI units)."""
+
+    index: int  # 1-based among moves
+    interval: int  # 1-based interval index
+    name: str
+    t_start: float
+    duration: float
+    start: float  # position [m]
+    stroke: float  # signed [m]
+    jerk_bound: float | None  # [m/s^3]
+
+    @property
+    def v_scale(self) -> float:
+        return abs(self.stroke) / self.duration
+
+    @property
+    def a_scale(self) -> float:
+        return abs(self.stroke) / self.duration**2
+
+    @property
+    def j_scale(self) -> float:
+        return abs(self.stroke) / self.duration**3
+
+
+def design_moves(problem, spm: float, settings: DesignSettings) -> list[Move]:
+    """The moves of ``problem`` at ``spm`` with their jerk bounds (``[design] jerk_max``)."""
+    sch = problem.timing.schedule(spm)
+    out = []
+    for itv, t0, dur in zip(problem.timing.intervals, sch.t_start, sch.duration):
+        if not itv.is_move:
+            continue
+        if not dur > 0:
+            raise ProblemError(str(problem.file), f"timing.intervals[{itv.index}].span_deg",
+                               f"move {itv.move_index} ({itv.name!r}) has no time (span 0 deg) for a stroke of "
+                               f"{abs(itv.stroke) * 1e3:g} mm")
+        bound = settings.jerk_max
+        if settings.jerk_max_from_law:
+            c_j = itv.law.characteristics.C_j
+            if math.isinf(c_j):
+                raise ProblemError(str(problem.file), "design.jerk_max_from_law",
+                                   f"the motion law {itv.law.label} of move {itv.move_index} has unbounded jerk; "
+                                   "give jerk_max_m_s3 instead")
+            bound = c_j * abs(itv.stroke) / dur**3
+        out.append(Move(itv.move_index, itv.index, itv.name,
+                        float(t0), float(dur), itv.start_position, itv.stroke, bound))
+    return out
+
+
+def initial_unit(mesh: Mesh, rest_order: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A feasible-shaped initial guess: the 3-4-5 polynomial (4-5-6-7 for rest_order 3)."""
+    law = make_law("poly7" if rest_order >= 3 else "poly5")
+    h = mesh.h
+    starts = np.arange(mesh.intervals + 1) * h
+    y, y1 = law.derivatives(starts, order=1)
+    t_nodes = (np.arange(mesh.intervals).reshape(-1, 1) + mesh.nodes.reshape(1, -1)) * h
+    a = law.derivatives(t_nodes.ravel(), order=2)[2].reshape(t_nodes.shape)
+    return y, y1, a
+
+
+@dataclass(frozen=True)
+class DriveChoice:
+    """The parts of one solve: a motor (or the candidates of a Bonmin choice) and a pulley.
+
+    ``teeth`` None means a continuous pulley radius between ``radius_bounds``.
+    """
+
+    motor: Any = None  # ServoMotor
+    teeth: int | None = None
+    radius_bounds: tuple[float, float] | None = None
+    candidates: tuple = ()  # motors for the Bonmin choice
+
+    @property
+    def label(self) -> str:
+        parts = []
+        if self.motor is not None:
+            parts.append(self.motor.name)
+        if self.candidates:
+            parts.append("one of " + ", ".join(m.name for m in self.candidates))
+        parts.append(f"{self.teeth} teeth" if self.teeth else "continuous radius")
+        return ", ".join(parts)
+
+
+class DriveSetup:
+    """What the NLP needs of ``problem.drive``: catalogue, load, limits, belt."""
+
+    def __init__(self, problem, settings: DesignSettings):
+        spec = problem.drive
+        self.problem = problem
+        self.spec = spec
+        self.file = str(problem.file)
+        self.catalogue = spec.catalogue()
+        self.load = spec.load
+        self.limits = spec.limits
+        self.belt = spec.belt_spec(self.catalogue)
+        self.profile = spec.profile
+        self.settings = settings
+        zmin = settings.pulley_teeth_min if settings.pulley_teeth_min is not None else spec.teeth_min
+        zmax = settings.pulley_teeth_max if settings.pulley_teeth_max is not None else spec.teeth_max
+        self.teeth_range = (zmin, zmax)
+        if zmax < zmin:
+            raise ProblemError(self.file, "design.pulley_teeth_max", f"{zmax} is below pulley_teeth_min {zmin}")
+        #: torque scale of the NLP [N m]: the largest peak torque in the catalogue
+        self.tau_ref = max([m.peak_torque for m in self.catalogue.motors.values()] or [1.0])
+
+    def pulley(self, teeth: int):
+        found = self.catalogue.pulleys_of(self.profile, teeth, teeth)
+        if not found:
+            from ..drive.catalogue import Pulley
+            from ..drive.transmission import pitch_diameter
+
+            pd = pitch_diameter(self.profile, teeth)
+            return Pulley(f"{self.profile}-{teeth}", self.profile, teeth, pd,
+                          float(self.catalogue.pulley_inertia(self.profile, pd)), "model")
+        return found[0]
+
+    def pulley_inertia(self, pitch_diameter):
+        if not self.settings.include_pulley_inertia:
+            return 0.0
+        return self.catalogue.pulley_inertia(self.profile, pitch_diameter)
+
+    def motors(self) -> list:
+        return list(self.catalogue.motors.values())
+
+    def fixed_motor(self):
+        if self.spec.motor is None:
+            raise ProblemError(self.file, "drive.motor", "is needed with design.motor_choice = \"fixed\" "
+                                                         "(or choose: motor_choice = \"enumerate\" or \"bonmin\")")
+        return self.catalogue.motor(self.spec.motor, (self.file, "drive.motor"))
+
+    def radius_bounds(self) -> tuple[float, float]:
+        from ..drive.transmission import pitch_diameter
+
+        return pitch_diameter(self.profile, self.teeth_range[0]) / 2, pitch_diameter(self.profile, self.teeth_range[1]) / 2
+
+    def transmission(self, teeth: int):
+        p = self.pulley(teeth)
+        return BeltPulley(p.pitch_diameter, inertia=p.inertia if self.settings.include_pulley_inertia else 0.0)
+
+    def allowable_belt_force(self, teeth: int | None) -> float | None:
+        """Largest effective belt tension [N] the belt checks accept (width and breaking, thesis appendix 2)."""
+        found = self.belt_limit(teeth)
+        return None if found is None else found[1]
+
+    def belt_limit(self, teeth: int | None) -> tuple[str, float, float, str] | None:
+        """The belt check that binds first: (drive.py's check name, allowable tension [N], the check's limit, unit)."""
+        if self.belt is None:
+            return None
+        from ..drive.checks import belt_load
+
+        grooves = teeth if teeth is not None else self.teeth_range[0]  # conservative for a continuous radius
+        unit = belt_load(1.0, grooves, self.belt)  # everything is linear in the tension
+        width_limit = self.belt.belt.width_factor
+        breaking_limit = self.belt.belt.breaking_tension[self.belt.cord]
+        width = width_limit / unit.required_width_factor
+        breaking = breaking_limit / unit.breaking_load
+        if width <= breaking:
+            return "belt_width", width, width_limit, "-"
+        return "belt_breaking", breaking, breaking_limit, "N"
+
+    def handover_force(self) -> float:
+        """|Effective belt tension| [N] at rest at the handover position (gravity and load forces)."""
+        from ..drive.load import load_torque
+
+        move = self.problem.timing.handover_move
+        s = np.array([move.end_position if move is not None else 0.0])
+        terms = load_torque(1e-5, BeltPulley(0.02), self.load, s, np.zeros(1), np.zeros(1))
+        return float(abs(np.asarray(terms.load_force).ravel()[0]))
+
+
+class ErrorTerm(Protocol):
+    """A term of the position error at the handover, summed and held within ``[design] handover_accuracy_mm``.
+
+    Terms are passed to :func:`~strokeopt.design.solve.solve_design` (``error_terms``; by default
+    ``problem.error_terms``, which the problem file fills). A term is hashable and compares by its
+    type and parameters (it is part of the NLP cache key); it holds no per-problem state.
+
+    * ``name``: how the checks table names it (``handover accuracy (<name>)``);
+    * ``fixed_error(problem)``: the part that does not depend on the design [m] (checked before
+      solving), or None;
+    * ``expression(nlp)``: the error [m] as a CasADi expression of the NLP under construction
+      (:class:`~strokeopt.design.nlp.Graph`: ``nlp.request``, ``nlp.built.params``, ``nlp.si``), or
+      None when the term does not apply to this problem. Numbers that change between solves enter
+      as parameters, functions of the solve's :class:`SolveRequest` (its ``cache`` holds what they
+      compute once per solve).
+    """
+
+    name: str
+
+    def fixed_error(self, problem) -> float | None: ...
+
+    def expression(self, nlp) -> Any: ...
+
+
+@dataclass
+class SolveRequest:
+    """Everything one solve needs; the NLP's numbers (parameters, bounds, start values) are functions of it.
+
+    ``pin_times``: unit times where each move passes each load switch (see :mod:`.pins`); None: found
+    from the warm start (or the initial guess). ``cache``: numbers a parameter function computes once
+    per solve (not copied by :func:`dataclasses.replace`).
+    """
+
+    problem: Any
+    spm: float
+    settings: DesignSettings
+    mesh: Mesh
+    objective: str
+    drive: DriveSetup | None = None
+    choice: DriveChoice | None = None
+    options: dict = field(default_factory=dict)
+    warm: list | None = None
+    radius0: float | None = None
+    relaxed: bool = False
+    enforce_accuracy: bool = False
+    error_terms: tuple = ()
+    pin_times: dict | None = None
+    cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    @cached_property
+    def moves(self) -> list[Move]:
+        return design_moves(self.problem, self.spm, self.settings)
+
+    @cached_property
+    def schedule(self):
+        return self.problem.timing.schedule(self.spm)
+
+    @cached_property
+    def period(self) -> float:
+        return float(self.problem.timing.period(self.spm))
+
+    @cached_property
+    def start(self) -> list[tuple]:
+        """Start point of every move: the warm start's solution on the same mesh, else the 3-4-5 law."""
+        out = []
+        for k in range(len(self.moves)):
+            warm = self.warm
+            if warm is not None and k < len(warm) and warm[k].mesh == self.mesh:
+                out.append((warm[k].S, warm[k].V, warm[k].A))
+            else:
+                out.append(initial_unit(self.mesh, self.settings.rest_order))
+        return out

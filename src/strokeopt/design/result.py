@@ -1,0 +1,129 @@
+"""The result of the design: :class:`Design` (the optimal stroke, the parts, the checks) and
+:class:`MoveResult` per move.
+
+Last step of the design's flow (:mod:`.solve` makes them). Files: :mod:`strokeopt.io.design_file`
+(design.json, cam table); text: :mod:`strokeopt.report.design`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .collocation import Mesh, MoveSolution, move_piece
+from ..motion.stroke import StrokeFunction, dwell_piece
+
+
+def stroke_from_solutions(problem, spm: float, solutions: list[MoveSolution], label: str = "optimal") -> StrokeFunction:
+    """The whole cycle's stroke: the dwells and the solved moves (exact collocation polynomials)."""
+    sch = problem.timing.schedule(spm)
+    pieces = []
+    it = iter(solutions)
+    for itv, t0, dur in zip(problem.timing.intervals, sch.t_start, sch.duration):
+        if itv.is_move:
+            pieces.append(move_piece(t0, dur, itv.start_position, itv.stroke, next(it), f"{itv.name}: {label}"))
+        else:
+            pieces.append(dwell_piece(t0, dur, itv.start_position, itv.name))
+    return StrokeFunction(sch.period, pieces, label=label)
+
+
+def move_direction(stroke: float) -> str:
+    """``up`` or ``down``: the convention of :func:`strokeopt.report.kinematics_summary` (stroke_mm >= 0)."""
+    return "up" if stroke > 0 else "down"
+
+
+@dataclass(frozen=True)
+class MoveResult:
+    """One optimised move: SI peaks and the unit-form collocation solution."""
+
+    index: int
+    interval: int
+    name: str
+    t_start: float
+    duration: float
+    start: float
+    stroke: float
+    solution: MoveSolution
+    v_max: float
+    a_max: float
+    jerk_max: float
+    C_a: float  # peak |y''| on the unit move (the acceleration coefficient)
+
+    def to_dict(self) -> dict:
+        return {
+            "index": self.index, "interval": self.interval, "name": self.name,
+            "t_start_s": self.t_start, "duration_s": self.duration,
+            "start_position_mm": self.start * 1e3, "stroke_mm": abs(self.stroke) * 1e3,
+            "direction": move_direction(self.stroke),
+            "v_max_m_s": self.v_max, "a_max_m_s2": self.a_max, "jerk_max_m_s3": self.jerk_max, "C_a": self.C_a,
+        }
+
+
+@dataclass
+class Design:
+    """An optimised stroke with its choices and its constraint report."""
+
+    problem: Any
+    spm: float
+    objective: str
+    objective_value: float
+    objective_unit: str
+    stroke: StrokeFunction
+    moves: list[MoveResult]
+    mesh: Mesh
+    status: str
+    solve_time_s: float
+    iterations: int
+    checks: list[dict] = field(default_factory=list)
+    active_constraints: list[str] = field(default_factory=list)
+    fine_grid: dict = field(default_factory=dict)
+    pulley_teeth: int | None = None
+    pitch_diameter: float | None = None
+    motor: str | None = None
+    notes: list[str] = field(default_factory=list)
+    motor_spec: Any = field(default=None, repr=False)  # the ServoMotor
+    settings: Any = field(default=None, repr=False)  # the DesignSettings it was solved with
+
+    @property
+    def solutions(self) -> list[MoveSolution]:
+        return [m.solution for m in self.moves]
+
+    @property
+    def radius(self) -> float | None:
+        return None if self.pitch_diameter is None else self.pitch_diameter / 2
+
+    def summary(self) -> dict:
+        """The JSON report of ``strokeopt solve`` (without the cam table)."""
+        return {
+            "status": self.status,
+            "problem": self.problem.name,
+            "problem_file": str(Path(self.problem.file).resolve()),
+            "objective": self.objective,
+            "objective_value": self.objective_value,
+            "objective_unit": self.objective_unit,
+            "spm": self.spm,
+            "cycle_time_s": self.stroke.period,
+            "motor": self.motor,
+            "pulley_teeth": self.pulley_teeth,
+            "pulley_pitch_diameter_mm": None if self.pitch_diameter is None else self.pitch_diameter * 1e3,
+            "mesh": {"intervals": self.mesh.intervals, "degree": self.mesh.degree},
+            "moves": [m.to_dict() for m in self.moves],
+            "checks": self.checks,
+            "active_constraints": self.active_constraints,
+            "fine_grid": self.fine_grid,
+            "solve_time_s": self.solve_time_s,
+            "iterations": self.iterations,
+            "notes": self.notes,
+        }
+
+    def check_value(self, name: str) -> float | None:
+        """The value of the check ``name`` (``peak_torque``, ``rms_torque``...), None when not checked."""
+        return next((c["value"] for c in self.checks if c["name"] == name), None)
+
+    def write(self, out_dir: str | Path, resolution_deg: float = 0.1) -> list[Path]:
+        """Write ``design.json`` and ``cam_table.csv`` into ``out_dir``; returns the paths
+        (:func:`strokeopt.io.design_file.write_design`)."""
+        from ..io.design_file import write_design
+
+        return write_design(self, out_dir, resolution_deg)

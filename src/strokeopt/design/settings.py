@@ -1,0 +1,94 @@
+"""The ``[design]`` section of a problem file: :class:`DesignSettings` and its reader.
+
+First step of the design's flow (settings -> :mod:`.request` -> :mod:`.nlp` -> :mod:`.solve`):
+:func:`parse_design` is called by :func:`strokeopt.io.problem_file.load_problem` with the
+section's :class:`~strokeopt.io.fields.Fields`; unknown keys are errors.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .collocation import Mesh
+from .objectives import OBJECTIVES
+
+MOTOR_CHOICES = ("fixed", "enumerate", "bonmin")
+PULLEY_CHOICES = ("fixed", "optimise", "continuous")
+
+
+@dataclass(frozen=True)
+class DesignSettings:
+    """The ``[design]`` section of a problem file (SI units inside).
+
+    ``rest_order``: derivatives that vanish at the ends of every move
+    (1: velocity; 2: velocity and acceleration, the default for a servo
+    following a cam table; 3: also jerk, with the jerk continuous inside the move).
+    ``jerk_max``: bound on |jerk| [m/s^3] (None: unbounded);
+    ``jerk_max_from_law``: bound each move by the peak jerk of the file's
+    motion law on that move instead. ``accuracy``: allowed position error at
+    the handover [m]. ``check_points``: fine-grid points per mesh interval;
+    ``check_tolerance``: relative violation between nodes that triggers a
+    mesh refinement (at most ``refinements`` doublings).
+    """
+
+    objective: str = "min_peak_torque"
+    mesh_intervals: int = 40
+    collocation_degree: int = 3
+    rest_order: int = 2
+    jerk_max: float | None = None
+    jerk_max_from_law: bool = False
+    accuracy: float = 0.5e-3
+    motor_choice: str = "fixed"
+    pulley: str = "fixed"
+    pulley_teeth_min: int | None = None
+    pulley_teeth_max: int | None = None
+    check_points: int = 20
+    check_tolerance: float = 0.005
+    refinements: int = 2
+    include_pulley_inertia: bool = True
+    solver_options: dict = field(default_factory=dict)
+
+    @property
+    def mesh(self) -> Mesh:
+        return Mesh(self.mesh_intervals, self.collocation_degree)
+
+
+def parse_design(f, *, file: str = "") -> DesignSettings:
+    """Read the ``[design]`` table with the :class:`~strokeopt.problem.Fields` reader (unknown keys are errors)."""
+    if f is None:
+        return DesignSettings()
+    objective = f.string("objective", "min_peak_torque", choices=tuple(OBJECTIVES))
+    n = f.number("mesh_intervals", 40, integer=True, min=1, max=2000)
+    d = f.number("collocation_degree", 3, integer=True, min=1, max=9)
+    rest = f.number("rest_order", 2, integer=True, min=1, max=3)
+    jerk = f.number("jerk_max_m_s3", None, positive=True)
+    from_law = f.boolean("jerk_max_from_law", False)
+    if from_law and jerk is not None:
+        raise f.error("jerk_max_from_law", "give either jerk_max_m_s3 or jerk_max_from_law = true, not both")
+    if rest == 3 and d < 2:
+        raise f.error("collocation_degree", "rest_order = 3 (jerk continuous) needs collocation_degree >= 2")
+    if objective == "min_snap" and d < 2:
+        raise f.error("collocation_degree", "min_snap needs collocation_degree >= 2 (snap of the acceleration polynomial)")
+    accuracy = f.number("handover_accuracy_mm", 0.5, positive=True) * 1e-3
+    motor_choice = f.string("motor_choice", "fixed", choices=MOTOR_CHOICES)
+    pulley = f.string("pulley", "fixed", choices=PULLEY_CHOICES)
+    zmin = f.number("pulley_teeth_min", None, integer=True, min=8)
+    zmax = f.number("pulley_teeth_max", None, integer=True, min=8)
+    if zmin is not None and zmax is not None and zmax < zmin:
+        raise f.error("pulley_teeth_max", f"must be at least pulley_teeth_min = {zmin}, got {zmax}")
+    check_points = f.number("check_points", 20, integer=True, min=2, max=1000)
+    check_tol = f.number("check_tolerance", 0.005, positive=True)
+    refinements = f.number("refinements", 2, integer=True, min=0, max=6)
+    pulley_inertia = f.boolean("include_pulley_inertia", True)
+    solver = f.table("solver", required=False)
+    options = {}
+    if solver is not None:
+        for key in list(solver.data):
+            value = solver.raw(key)
+            if not isinstance(value, (int, float, str, bool)):
+                raise solver.error(key, f"solver options must be numbers, strings or booleans, got {value!r}")
+            options[key] = value
+        solver.finish()
+    f.finish()
+    return DesignSettings(objective, n, d, rest, jerk, from_law, accuracy, motor_choice, pulley, zmin, zmax,
+                          check_points, check_tol, refinements, pulley_inertia, options)

@@ -1,0 +1,97 @@
+"""Studies over many solves: the stitch-rate sweep (:func:`sweep_design`, :func:`fastest_feasible`)
+and the accuracy/time study of the mesh (:func:`mesh_study`).
+
+Each solve is a :func:`~.solve.solve_design` with the same default handover error terms
+(``error_terms=None``: the problem's). Figures: :mod:`strokeopt.report.design`.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+from .collocation import Mesh
+from .nlp import clear_cache
+from .settings import DesignSettings
+from .solve import solve_design
+from ..errors import SolverError
+
+
+def sweep_design(problem, spms, *, objective: str | None = None, settings: DesignSettings | None = None,
+                 progress=None, error_terms=None) -> list[dict]:
+    """Solve at each stitch rate in ``spms`` (ascending), each solve warm-started from the previous.
+
+    Returns one row per rate: ``spm``, ``feasible``, the objective, motor, pulley, peak and RMS torque,
+    and for an infeasible rate the reason. ``progress``: a callable wrapping the iterable (tqdm);
+    ``error_terms``: as for :func:`~.solve.solve_design` (None: the problem's).
+    """
+    rows = []
+    warm = None
+    it = progress(list(spms)) if progress is not None else list(spms)
+    for spm in it:
+        t0 = time.perf_counter()
+        try:
+            d = solve_design(problem, objective=objective, spm=spm, settings=settings, warm_start=warm,
+                             error_terms=error_terms)
+        except SolverError as exc:
+            first, *rest = exc.reason.splitlines()  # the first line says the worst limit; details follow
+            rows.append({"spm": float(spm), "feasible": False, "reason": first,
+                         **({"details": [r.strip() for r in rest]} if rest else {}),
+                         "solve_time_s": time.perf_counter() - t0})
+            continue
+        warm = d
+        if d.status == "limits exceeded":
+            rows.append({"spm": float(spm), "feasible": False, "reason": d.notes[0],
+                         "solve_time_s": time.perf_counter() - t0})
+            continue
+        rows.append({"spm": float(spm), "feasible": True, "objective_value": d.objective_value,
+                     "motor": d.motor, "pulley_teeth": d.pulley_teeth, "peak_torque_N_m": d.check_value("peak_torque"),
+                     "rms_torque_N_m": d.check_value("rms_torque"),
+                     "a_max_m_s2": max(m.a_max for m in d.moves), "solve_time_s": time.perf_counter() - t0})
+    return rows
+
+
+def fastest_feasible(rows: list[dict]) -> float | None:
+    """The highest stitch rate of a sweep below which every rate was feasible (None: the first failed)."""
+    best = None
+    for r in sorted(rows, key=lambda r: r["spm"]):
+        if not r["feasible"]:
+            break
+        best = r["spm"]
+    return best
+
+
+#: Meshes of the accuracy/time study: (intervals, degree); the last is the reference.
+STUDY_MESHES = ((10, 2), (20, 2), (40, 2), (10, 3), (20, 3), (40, 3), (80, 3), (160, 4))
+
+
+def mesh_study(problem, *, objective: str | None = None, spm: float | None = None,
+               settings: DesignSettings | None = None, meshes=STUDY_MESHES, progress=None,
+               error_terms=None) -> list[dict]:
+    """What accuracy costs in time: the same design on each mesh against the last (finest) one.
+
+    The parts are held fixed (the file's motor and pulley) so the study sees the discretisation
+    only. Rows: intervals, degree, variables, objective, its error against the reference [%],
+    the largest relative violation of a bound between collocation nodes (fine grid), solve time.
+    """
+    settings = replace(settings or getattr(problem, "design", None) or DesignSettings(),
+                       motor_choice="fixed", pulley="fixed" if getattr(problem, "drive", None) else "fixed",
+                       refinements=0)
+    rows = []
+    it = progress(list(meshes)) if progress is not None else list(meshes)
+    for n, d in it:
+        clear_cache()  # every mesh is timed with its build
+        t0 = time.perf_counter()
+        design = solve_design(problem, objective=objective, spm=spm, settings=settings, mesh=Mesh(n, d),
+                              error_terms=error_terms)
+        elapsed = time.perf_counter() - t0
+        nodes = n * (d + 1) + 2 * (n + 1)
+        rows.append({"intervals": n, "degree": d, "variables": nodes * len(design.moves),
+                     "objective_value": design.objective_value,
+                     "violation_between_nodes": float(design.fine_grid["worst_relative_violation"]),
+                     "time_s": elapsed})
+    ref = rows[-1]["objective_value"]
+    for r in rows:
+        r["objective_error_pct"] = 100.0 * abs(r["objective_value"] / ref - 1.0) if ref else None
+    rows[-1]["reference"] = True
+    return rows

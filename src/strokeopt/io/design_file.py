@@ -1,0 +1,168 @@
+"""Design files: ``design.json`` and ``cam_table.csv`` of a :class:`~strokeopt.design.result.Design`.
+
+``design.json`` (written by :func:`write_design`, which :meth:`Design.write` calls, read by
+:func:`read_design` and by ``strokeopt verify``)::
+
+    {
+      "format": "strokeopt-design", "version": 1,
+      "problem_file": "<absolute path>", "problem": "<name>",
+      "spm": 600.0, "cycle_time_s": ..., "objective": "min_peak_torque",
+      "objective_value": ..., "objective_unit": "N m",
+      "status": "optimal", "motor": "<name or null>", "pulley_teeth": 28,
+      "pulley_pitch_diameter_mm": ..., "mesh": {"intervals": 40, "degree": 3},
+      "moves": [{"index": 1, "interval": 2, "name": ..., "t_start_s": ...,
+                 "duration_s": ..., "start_position_mm": ..., "stroke_mm": (>= 0), "direction": "up"|"down",
+                 "v_max_m_s": ..., "a_max_m_s2": ..., "jerk_max_m_s3": ...,
+                 "C_a": ..., "unit_solution": {"S": [...], "V": [...], "A": [[...], ...]}}],
+      "intervals": [{"index": 1, "name": ..., "kind": "dwell"|"move",
+                     "t_start_s": ..., "duration_s": ..., "position_mm": ...}],
+      "checks": [{"name": ..., "value": ..., "limit": ..., "unit": ..., "margin": ..., "ok": ...}],
+      "active_constraints": [...], "solve_time_s": ...,
+      "cam_table": {"resolution_deg": 0.1, "columns": ["cam_angle_deg", "position_mm",
+                    "velocity_m_s", "acceleration_m_s2", "motor_angle_deg"], "rows": [[...], ...]}
+    }
+
+``unit_solution`` is the collocation solution of a move in unit form
+(``y = (s - start)/stroke`` over unit time; ``S``, ``V`` at the mesh interval
+starts, ``A`` the node accelerations per interval): with ``mesh`` it rebuilds
+the stroke exactly (:func:`read_design`). The cam table gives the motor angle
+as ``position / pulley radius`` (0 at the handover position).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..design.collocation import Mesh, MoveSolution, move_piece
+from ..errors import ProblemError
+from ..motion.stroke import StrokeFunction, dwell_piece
+
+
+def cam_table(design, resolution_deg: float = 0.1) -> dict[str, np.ndarray]:
+    """The stroke sampled at every ``resolution_deg`` of cam angle (the drive's master resolution).
+
+    Columns: cam angle [deg], position [mm], velocity [m/s], acceleration [m/s^2], motor angle [deg]
+    (position over the pulley radius; 0 at the 0 mm position).
+    """
+    n = int(round(360.0 / resolution_deg))
+    angle = np.arange(n) * resolution_deg
+    k = design.stroke.evaluate(angle / 360.0 * design.stroke.period)
+    r = design.radius if design.radius else design.problem.transmission.radius
+    return {"cam_angle_deg": angle, "position_mm": k.s * 1e3, "velocity_m_s": k.v,
+            "acceleration_m_s2": k.a, "motor_angle_deg": np.degrees(k.s / r)}
+
+
+def design_json(design, resolution_deg: float = 0.1) -> dict:
+    """The data of ``design.json`` (see the module docstring)."""
+    sch = design.problem.timing.schedule(design.spm)
+    out = {"format": "strokeopt-design", "version": 1, **design.summary()}
+    out["moves"] = [{**m.to_dict(), "unit_solution": {"S": m.solution.S.tolist(), "V": m.solution.V.tolist(),
+                                                      "A": m.solution.A.tolist()}} for m in design.moves]
+    out["intervals"] = [{"index": itv.index, "name": itv.name, "kind": "move" if itv.is_move else "dwell",
+                         "t_start_s": float(t0), "duration_s": float(dur), "position_mm": itv.start_position * 1e3}
+                        for itv, t0, dur in zip(design.problem.timing.intervals, sch.t_start, sch.duration)]
+    table = cam_table(design, resolution_deg)
+    cols = list(table)
+    out["cam_table"] = {"resolution_deg": resolution_deg, "columns": cols,
+                        "rows": np.column_stack([table[c] for c in cols]).tolist()}
+    return out
+
+
+def write_design(design, out_dir: str | Path, resolution_deg: float = 0.1) -> list[Path]:
+    """Write ``design.json`` and ``cam_table.csv`` into ``out_dir``; returns the paths."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    data = design_json(design, resolution_deg)
+    p_json = out / "design.json"
+    p_json.write_text(_json_text(data) + "\n", encoding="utf-8")
+    p_csv = out / "cam_table.csv"
+    table = cam_table(design, resolution_deg)
+    header = ",".join(table)
+    np.savetxt(p_csv, np.column_stack(list(table.values())), delimiter=",", header=header, comments="",
+               fmt=["%.1f", "%.6f", "%.6f", "%.4f", "%.5f"])
+    return [p_json, p_csv]
+
+
+def _plain(obj: Any, where: str = "") -> Any:
+    """JSON-ready values: infinities become None, NaN is an error (the rule of ``strokeopt.report.format.to_json``)."""
+    if isinstance(obj, dict):
+        return {k: _plain(v, f"{where}.{k}" if where else str(k)) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_plain(v, f"{where}[{i}]") for i, v in enumerate(obj)]
+    if isinstance(obj, (np.floating, float)):
+        x = float(obj)
+        if math.isnan(x):
+            raise ValueError(f"NaN in report field {where!r}: refusing to report it")
+        return None if math.isinf(x) else x
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj
+
+
+def _json_text(obj: Any) -> str:
+    return json.dumps(_plain(obj), indent=2, allow_nan=False)
+
+
+def check_out_dir(path: str | Path, option: str = "--out") -> Path:
+    """Check before a solve that ``path`` is a directory or can be created as one (:func:`write_design`).
+
+    Raises :class:`ProblemError` naming ``option`` otherwise, so a long solve does not end on a bad path.
+    """
+    out = Path(path)
+    if out.exists():
+        if not out.is_dir():
+            raise ProblemError(option, "", f"{str(path)!r} exists and is not a directory: give a directory "
+                                           "(design.json and cam_table.csv are written into it)")
+        if not os.access(out, os.W_OK):
+            raise ProblemError(option, "", f"directory {str(path)!r} is not writable")
+        return out
+    parent = out.absolute().parent
+    while not parent.exists():
+        parent = parent.parent
+    if not parent.is_dir():
+        raise ProblemError(option, "", f"cannot create directory {str(path)!r}: {str(parent)!r} is not a directory")
+    if not os.access(parent, os.W_OK):
+        raise ProblemError(option, "", f"cannot create directory {str(path)!r}: {str(parent)!r} is not writable")
+    return out
+
+
+def read_design(path: str | Path) -> tuple[dict, StrokeFunction]:
+    """Read a ``design.json``: its data and the exact optimal :class:`StrokeFunction` rebuilt from it."""
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ProblemError(str(path), "", "no such file") from None
+    except (OSError, ValueError) as exc:
+        raise ProblemError(str(path), "", f"is not a readable design file: {exc}") from None
+    if not isinstance(data, dict) or data.get("format") != "strokeopt-design":
+        raise ProblemError(str(path), "format", "is not a strokeopt design file (format != 'strokeopt-design')")
+    try:
+        mesh = Mesh(int(data["mesh"]["intervals"]), int(data["mesh"]["degree"]))
+        moves = {m["interval"]: m for m in data["moves"]}
+        pieces = []
+        for itv in data["intervals"]:
+            t0, dur, pos = itv["t_start_s"], itv["duration_s"], itv["position_mm"] * 1e-3
+            if itv["kind"] == "move":
+                m = moves[itv["index"]]
+                u = m["unit_solution"]
+                sol = MoveSolution(mesh, np.asarray(u["S"], float), np.asarray(u["V"], float), np.asarray(u["A"], float))
+                sign = {"up": 1.0, "down": -1.0, None: 1.0}[m.get("direction")]  # older files: stroke_mm signed
+                pieces.append(move_piece(t0, dur, pos, sign * m["stroke_mm"] * 1e-3, sol, f"{itv['name']}: optimal"))
+            else:
+                pieces.append(dwell_piece(t0, dur, pos, itv["name"]))
+        stroke = StrokeFunction(float(data["cycle_time_s"]), pieces, label="optimal")
+    except KeyError as exc:
+        raise ProblemError(str(path), str(exc.args[0]), "is missing: the design file is incomplete (write it "
+                                                        "again with strokeopt solve --out)") from None
+    except (TypeError, ValueError) as exc:
+        raise ProblemError(str(path), "", f"design file is malformed: {exc}") from None
+    return data, stroke
