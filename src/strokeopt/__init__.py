@@ -1,30 +1,27 @@
 """strokeopt: design servo-driven reciprocating mechanisms ("electronic cams").
 
-The data flow::
+The data flow, one package per step::
 
     problem file (TOML)
-        -> Problem            validated, typed, SI units           problem.py
-        -> TimingDiagram      dwells and moves on the cam circle   timing.py
-        -> StrokeFunction     s, v, a, jerk as CasADi Functions:   laws.py, stroke.py
-                              a classic law or a collocation
-                              solution
-        -> Drive              transmission + motor + load: torque, transmission.py,
-                              speed, checks; catalogue sizing      actuators.py, drive.py
-        -> Design             direct collocation of every move:   design.py,
-                              optimal stroke, pulley and motor,    collocation.py
-                              constraint report, design.json
-        -> Scene simulation   contact model as data; a scene's     model.py, scene.py,
-                              CasADi ODE, CVODES over one cycle:   simulate.py
-                              impact, lag, gap N, needle release
-        -> Servo loop         cascade position/speed loop, belt    servo.py
-                              as a spring (python-control):
-                              handover error and its causes; the
-                              design's servo accuracy term; the
-                              accuracy / stitch-rate trade-off
-        -> Report             tables, JSON, plots                  report.py, plots.py
+      io/        -> Problem            read and checked field by field, SI units    problem.py, io/problem_file.py
+      motion/    -> TimingDiagram      dwells and moves on the cam circle           motion/timing.py
+                 -> StrokeFunction     s, v, a, jerk as CasADi Functions: a classic  motion/laws.py,
+                                       law or an optimised stroke                   motion/stroke.py
+      drive/     -> torque and checks  transmission + motor + load; catalogue       drive/transmission.py, load.py,
+                                       sizing, highest stitch rate                  checks.py, sizing.py
+      design/    -> Design             direct collocation of every move: optimal    design/request.py -> nlp.py ->
+                                       stroke, pulley and motor under one builder   limits.py, objectives.py ->
+                                       per limit; design.json (io/design_file.py)   solve.py -> result.py
+      contact/   -> SceneResult        the mechanism as data; a scene's CasADi ODE  contact/model.py, scene.py,
+                                       over one cycle (CVODES): impact, lag, gap N  simulate.py, verify.py
+      servo/     -> AccuracyResult     cascade loop and belt (python-control): the  servo/plant.py, loop.py,
+                                       handover error, the design's error term,     accuracy.py, kernel.py,
+                                       what accuracy costs in stitch rate           tradeoff.py
+      report/    -> text, JSON, figures                                             report/<area>.py
 
-``cli.py`` ties these together; notebooks and tests use the same public API
-exported here.
+The domain packages (io, motion, drive, design, contact, servo) return data and import
+neither ``report`` nor ``bench`` nor ``cli``; ``cli`` parses, calls the API and reports;
+``bench`` measures. Notebooks and tests use the public API exported here.
 """
 
 from .drive.catalogue import Belt, Catalogue, Pulley, ServoMotor, load_catalogue
@@ -47,20 +44,21 @@ from .contact.model import Body, Element, ForceLaw, Model
 from .problem import Problem
 from .io.problem_file import load_problem
 from .contact.scene import Scene, make_scene
-from .servo.kernel import ServoErrorTerm  # noqa: F401  (the design's handover error term of a [servo] problem)
+from .servo.kernel import ServoErrorTerm
 from .servo.accuracy import AccuracyResult, accuracy_report, handover_accuracy
 from .servo.plant import DriveAxis, axis_from_problem
 from .servo.settings import ServoSettings
 from .servo.tradeoff import tradeoff
 from .contact.simulate import SceneResult, SimulationOptions, simulate_scene
 from .contact.studies import sweep_spm, tolerance_study
+from .contact.verify import verify
 from .motion.stroke import Kinematics, Piece, StrokeFunction
 from .motion.timing import Interval, TimingDiagram
 from .drive.transmission import BeltPulley, ScrewLever, SliderCrank, Transmission, gt3_pitch_diameter
 
 __all__ = [
     "Body", "Element", "ForceLaw", "Model", "Scene", "SceneResult", "SimulationOptions", "make_scene",
-    "simulate_scene", "sweep_spm", "tolerance_study",
+    "simulate_scene", "sweep_spm", "tolerance_study", "verify",
     "LAW_NAMES", "BeltPulley", "Characteristics", "Interval", "Kinematics", "MotionLaw", "Piece", "Problem",
     "ProblemError", "SolverError", "StrokeFunction", "StrokeoptError", "TimingDiagram", "Transmission",
     "gt3_pitch_diameter", "law_table", "load_problem", "make_law",
@@ -68,7 +66,7 @@ __all__ = [
     "SliderCrank", "drive_checks", "load_catalogue", "load_torque", "optimal_radius", "size_drive",
     "OBJECTIVES", "Design", "DesignSettings", "Mesh", "compare_with_laws", "design_text", "mesh_study", "read_design",
     "solve_design", "sweep_design",
-    "AccuracyResult", "DriveAxis", "ServoSettings", "accuracy_report", "axis_from_problem", "handover_accuracy",
+    "AccuracyResult", "DriveAxis", "ServoErrorTerm", "ServoSettings", "accuracy_report", "axis_from_problem", "handover_accuracy",
     "tradeoff",
 ]
 __version__ = "0.1.0"

@@ -36,11 +36,11 @@ class Problem:
     default_law: MotionLaw
     transmission: BeltPulley  # [transmission]: the toothed pulley, with its teeth (no inertia: the ideal drive)
     data: dict = field(repr=False)  # the raw data after overrides, for reporting
-    model: Model | None = field(default=None, repr=False)  # [model]: the contact model (model.py)
-    scenes: dict[str, Scene] | None = field(default=None, repr=False)  # [scenes.*] (scene.py)
-    drive: DriveSpec | None = field(default=None, repr=False)  # [drive]: motor, load, limits (drive.py)
-    design: DesignSettings | None = field(default=None, repr=False)  # [design]: optimal stroke (design.py)
-    servo: "ServoSettings | None" = field(default=None, repr=False)  # [servo]: servo loop and belt (servo.py)
+    model: Model | None = field(default=None, repr=False)  # [model]: the contact model (contact/model.py)
+    scenes: dict[str, Scene] | None = field(default=None, repr=False)  # [scenes.*] (contact/scene.py)
+    drive: DriveSpec | None = field(default=None, repr=False)  # [drive]: motor, load, limits (drive/spec.py)
+    design: DesignSettings | None = field(default=None, repr=False)  # [design]: optimal stroke (design/settings.py)
+    servo: "ServoSettings | None" = field(default=None, repr=False)  # [servo]: servo loop and belt (servo/settings.py)
     #: the terms of the handover position error the design holds (design.request.ErrorTerm; the
     #: problem file gives the servo's term with a [servo] section)
     error_terms: tuple = field(default=(), repr=False)

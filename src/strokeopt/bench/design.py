@@ -40,7 +40,7 @@ def _bench_design_resolve() -> BenchResult:
                              BenchRow("re-solve, built solver, warm start", warm)],
                        measured_s=warm, ratio=cold / warm, ratio_label="first / re-solve",
                        notes=["all three moves in one NLP (move 1 alone is a third of it)",
-                              "handover accuracy terms (servo.py) not included here"])
+                              "handover accuracy terms (servo/kernel.py) not included here"])
 
 @benchmark("design_reference", "full reference design: every catalogue motor, pulley radius then teeth "
                                "(problems/deco2000_needle_bar.toml defaults)", target_s=10.0)

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ..errors import ProblemError
-from .common import _emit, _load, _plot_path, _spm_value, _write_figure
+from .common import _emit, progress_bar, _load, _plot_path, _spm_value, _write_figure
 
 
 def cmd_laws(args) -> int:
@@ -52,11 +52,7 @@ def cmd_size(args) -> int:
     if problem.drive is None:
         raise ProblemError(args.problem, "drive", "the problem has no [drive] section (motor, moving_mass_kg, ...)")
     catalogue = problem.drive.catalogue(args.catalogue)
-    progress = None
-    if args.max_spm and not args.json:
-        from tqdm import tqdm
-
-        progress = lambda it: tqdm(it, desc="max spm", unit="pair", file=sys.stderr, leave=False)  # noqa: E731
+    progress = progress_bar(args, "max spm", "pair", when=args.max_spm)
     sizing = size_drive(problem, catalogue=catalogue, motors=args.motor, teeth=args.pulley_teeth,
                         find_max_spm=args.max_spm, progress=progress)
     report = sizing.to_dict(explain=args.explain)
@@ -105,12 +101,7 @@ def cmd_accuracy(args) -> int:
         extra = [(label, stroke)]  # its row in the table of the classic laws
         drive_used = _design_drive(args, data)
     problem = _load(args)
-    progress = None
-    if (args.compare_laws or extra) and not args.json:
-        from tqdm import tqdm
-
-        def progress(items):
-            return tqdm(items, desc="laws", unit="law", file=sys.stderr, leave=False)
+    progress = progress_bar(args, "laws", "law", when=bool(args.compare_laws or extra))
     # with --design the whole report is of the design's stroke on its drive; the classic laws follow as a table
     report, result = accuracy_report(problem, problem.spm, stroke=stroke, label=label,
                                      compare_laws=args.compare_laws or bool(extra), extra_strokes=extra,
@@ -164,12 +155,7 @@ def cmd_tradeoff(args) -> int:
             raise ProblemError("--accuracies", "", f"every accuracy must be positive, got {args.accuracies!r}")
     if not args.resolution > 0:
         raise ProblemError("--resolution", "", f"must be positive, got {args.resolution!r}")
-    progress = None
-    if not args.json:
-        from tqdm import tqdm
-
-        def progress(items):
-            return tqdm(items, desc="tradeoff", file=sys.stderr, leave=False)
+    progress = progress_bar(args, "tradeoff")
     report = tradeoff(problem, accuracies, strokes=args.strokes, resolution=args.resolution, progress=progress)
     if args.json:
         _emit(to_json(report))
@@ -300,11 +286,7 @@ def cmd_solve(args) -> int:
     if args.out is not None:
         check_out_dir(args.out)  # before the solve, not after it
     problem = _load(args)
-    progress = None
-    if not args.json:
-        from tqdm import tqdm
-
-        progress = lambda it, desc="solve": tqdm(it, desc=desc, unit="solve", file=sys.stderr, leave=False)  # noqa: E731
+    progress = progress_bar(args, "solve", "solve")
     if args.study == "mesh":
         rows = mesh_study(problem, objective=args.objective, progress=progress and (lambda it: progress(it, "mesh")))
         if args.json:

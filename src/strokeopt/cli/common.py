@@ -4,8 +4,10 @@ paths and writing, and printing JSON (stdout, also while solver logs go to stder
 from __future__ import annotations
 
 import sys
+from contextlib import contextmanager
 from pathlib import Path
 
+from .._stdout import stdout_to
 from ..errors import ProblemError
 
 DEFAULT_OUT = Path("strokeopt-out")
@@ -62,6 +64,15 @@ def _write_figure(figure_fn, path: Path | None, args) -> None:
     print(f"figure written to {path}", file=sys.stderr if args.json else sys.stdout)
 
 
+def progress_bar(args, desc: str, unit: str = "it", when: bool = True):
+    """A progress wrapper for an iterable (tqdm on stderr), or None with --json or when not ``when``."""
+    if args.json or not when:
+        return None
+    from tqdm import tqdm
+
+    return lambda items, desc=desc: tqdm(items, desc=desc, unit=unit, file=sys.stderr, leave=False)
+
+
 _JSON_OUT = None  # where --json output goes while solver logs are sent to stderr
 
 
@@ -70,30 +81,13 @@ def _emit(text: str) -> None:
     print(text, file=_JSON_OUT or sys.stdout)
 
 
-class _LogsToStderr:
-    """With --json --verbose: every log (IPOPT and SUNDIALS through CasADi, which print via
-    Python's sys.stdout or the C stdout) goes to stderr, so stdout carries only the JSON."""
-
-    def __enter__(self):
-        import os
-
-        global _JSON_OUT
-        sys.stdout.flush()
-        self._saved_fd = os.dup(1)
-        _JSON_OUT = os.fdopen(os.dup(self._saved_fd), "w")
-        os.dup2(2, 1)
-        self._saved_stdout = sys.stdout
-        sys.stdout = sys.stderr
-        return self
-
-    def __exit__(self, *exc):
-        import os
-
-        global _JSON_OUT
-        _JSON_OUT.flush()
-        _JSON_OUT.close()
-        _JSON_OUT = None
-        sys.stdout = self._saved_stdout
-        os.dup2(self._saved_fd, 1)
-        os.close(self._saved_fd)
-        return False
+@contextmanager
+def logs_to_stderr():
+    """With --json --verbose: every log goes to stderr, so stdout carries only the JSON (:func:`_emit`)."""
+    global _JSON_OUT
+    with stdout_to(2) as original:
+        _JSON_OUT = original
+        try:
+            yield
+        finally:
+            _JSON_OUT = None

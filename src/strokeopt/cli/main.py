@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 from ..errors import ProblemError, SolverError, StrokeoptError
-from .common import _LogsToStderr
+from .common import logs_to_stderr
 from .parser import build_parser
 
 
@@ -37,7 +37,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         _check_plot_format(args)
         if getattr(args, "json", False) and getattr(args, "verbose", False):
-            with _LogsToStderr():
+            with logs_to_stderr():
                 return args.run(args)
         return args.run(args)
     except ProblemError as exc:

@@ -116,7 +116,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(run=cmd_solve)
 
     p = sub.add_parser("bench", help="speed benchmarks, each against a reference measured in the same run",
-                       description="Run the registered benchmarks (strokeopt/bench.py): each times a capability "
+                       description="Run the registered benchmarks (strokeopt/bench/): each times a capability "
                                    "and a reference implementation side by side and prints the ratio and its target.",
                        epilog="Example: strokeopt bench --only size_catalogue")
     p.add_argument("--only", action="append", metavar="NAME", help="run only this benchmark (repeatable)")

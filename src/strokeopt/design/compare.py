@@ -73,7 +73,7 @@ def compare_with_laws(design: Design, laws=None) -> list[dict]:
     Each row: law, peak acceleration and jerk, integrals, peak and RMS torque (with a drive), and
     ``vs_optimal_pct``: how much larger the law's value of the design's objective measure is;
     ``feasible`` and ``violates``: whether the law meets the design problem's own constraints (rest
-    order, jerk bounds, drive.py's enforced checks on the design's motor and pulley; the laws'
+    order, jerk bounds, the drive package's enforced checks on the design's motor and pulley; the laws'
     handover accuracy is not checked) and which it breaks. The optimum comes first, then the
     feasible laws, then the infeasible ones: a law that breaks a constraint does not beat the optimum.
     """

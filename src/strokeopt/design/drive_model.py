@@ -1,6 +1,6 @@
 """The drive in the NLP: pulley radius, motor, and the motor torque and belt force of every move and dwell.
 
-Built by :func:`.limits.build_drive` before the limits that read it (drive.py's load model,
+Built by :func:`.limits.build_drive` before the limits that read it (the drive package's load model,
 :func:`~strokeopt.drive.sizing.load_torque`, on CasADi symbols). The pulley radius is a
 decision variable scaled by a reference radius: free between the catalogue's bounds, or held at a
 tooth count's radius by equal bounds. A fixed pulley's inertia is its catalogue value: the inertia

@@ -1,7 +1,7 @@
 """The solution read on a fine grid between the collocation nodes.
 
 After a solve (:mod:`.refine`): the peaks of every move from its exact polynomials
-(:func:`move_results`), the jerk bounds between nodes (:func:`fine_grid_report`) and drive.py's
+(:func:`move_results`), the jerk bounds between nodes (:func:`fine_grid_report`) and the drive package's
 checks over the whole cycle (:func:`drive_checks_fine`), which decide whether the mesh is refined.
 """
 
@@ -84,7 +84,7 @@ def fine_cycle(problem, spm: float, moves: list[Move], sols: list[MoveSolution],
 
 def drive_checks_fine(drive: DriveSetup, motor, teeth: int | None, radius: float, problem, spm, moves, sols,
                        per_interval: int) -> list:
-    """drive.py's checks of the solution, on a fine grid over the whole cycle."""
+    """the drive package's checks of the solution, on a fine grid over the whole cycle."""
     from ..drive.checks import drive_checks
 
     switches = switch_positions(drive)

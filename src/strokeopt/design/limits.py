@@ -2,7 +2,7 @@
 
 Each :class:`Limit` owns its NLP rows (:meth:`Limit.on_move`, :meth:`Limit.on_cycle`, as
 :class:`LimitGroup` s whose ``need`` and ``what`` make the message of :mod:`.diagnose`), the names of
-drive.py's checks that re-read it on the fine grid (:attr:`Limit.checks`: a violation there beyond
+the drive package's checks that re-read it on the fine grid (:attr:`Limit.checks`: a violation there beyond
 ``check_tolerance`` refines the mesh, see :mod:`.refine`) and its own rows of the checks table
 (:meth:`Limit.report`). A new limit is one new builder in :data:`MOVE_LIMITS` or
 :data:`DRIVE_LIMITS`. Built by :mod:`.nlp`; the drive's symbols they read come from
@@ -35,7 +35,7 @@ class LimitGroup:
     unit: str
     need: Any
     move: int | None = None
-    check: str = ""  # the name of the same limit in the checks table (drive.py's names), for short messages
+    check: str = ""  # the name of the same limit in the checks table (the drive package's names), for short messages
     #: False, or a function of the solve's request returning False: the rows exist (one NLP
     #: structure for every solve) but their bound is infinite
     enforced: Any = True
@@ -51,7 +51,7 @@ class LimitGroup:
 class Limit:
     """One kind of limit (see the module docstring); the base adds nothing."""
 
-    #: drive.py's checks (fine grid, whole cycle) that hold this limit
+    #: the drive package's checks (fine grid, whole cycle) that hold this limit
     checks: tuple[str, ...] = ()
 
     def on_move(self, g, k: int) -> None:
@@ -61,7 +61,7 @@ class Limit:
         """Rows over the whole cycle, after every move."""
 
     def report(self, nlp, outcome) -> list[dict]:
-        """Rows of the checks table besides drive.py's (name, value, limit, unit)."""
+        """Rows of the checks table besides the drive package's (name, value, limit, unit)."""
         return []
 
 
@@ -160,7 +160,7 @@ class BeltTension(Limit):
         belt = req.drive.belt_limit(req.choice.teeth)
         if belt is None:
             return
-        # the tension the belt checks allow; said in the units of the check that binds (drive.py's names)
+        # the tension the belt checks allow; said in the units of the check that binds (the drive package's names)
         check, f_allow, belt_lim, belt_unit = belt
         f_lim = g.built.param("belt force limit", lambda r: r.drive.belt_limit(r.choice.teeth)[1])
         allf = ca.horzcat(*[ca.reshape(f, 1, -1) for f in dm.forces]) / f_lim
@@ -216,7 +216,7 @@ class HandoverAccuracy(Limit):
 MOVE_LIMITS = (JerkBound(),)
 #: Limits of the drive, built with a [drive] section, in this order.
 DRIVE_LIMITS = (PeakTorque(), Speed(), RmsTorque(), BeltTension(), InertiaRatio(), HandoverAccuracy())
-#: drive.py's checks the design holds: a fine-grid violation of one of them refines the mesh.
+#: the drive package's checks the design holds: a fine-grid violation of one of them refines the mesh.
 ENFORCED_CHECKS = frozenset(c for lim in DRIVE_LIMITS for c in lim.checks)
 
 

@@ -170,7 +170,7 @@ class DriveSetup:
         return None if found is None else found[1]
 
     def belt_limit(self, teeth: int | None) -> tuple[str, float, float, str] | None:
-        """The belt check that binds first: (drive.py's check name, allowable tension [N], the check's limit, unit)."""
+        """The belt check that binds first: (the drive package's check name, allowable tension [N], the check's limit, unit)."""
         if self.belt is None:
             return None
         from ..drive.checks import belt_load

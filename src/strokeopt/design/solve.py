@@ -47,6 +47,7 @@ from .result import Design, stroke_from_solutions
 from .settings import DesignSettings
 from .solver import solver_options as _solver_options
 from ..errors import ProblemError, SolverError
+from ..io.plain import format_value
 
 
 def solve_design(problem, *, objective: str | None = None, spm: float | None = None,
@@ -107,7 +108,7 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     if failed:  # beyond check_tolerance after every refinement: not a design to build
         design.status = "limits exceeded"
         design.notes.insert(0, "limits exceeded between collocation nodes: " + "; ".join(
-            f"{c['name']} {_number_text(c['value'])} {c['unit']} > limit {_number_text(c['limit'])} "
+            f"{c['name']} {format_value(c['value'])} {c['unit']} > limit {format_value(c['limit'])} "
             f"({-100 * c['margin']:.2f} % over)" for c in failed) + "; use more mesh intervals ([design] "
             "mesh_intervals) or refinements")
     if drive is not None:
@@ -123,18 +124,6 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
                             f"{100 * settings.check_tolerance:g} %) after {settings.refinements} refinements: "
                             f"use more mesh intervals")
     return design
-
-
-def _number_text(x: float, digits: int = 4) -> str:
-    """A number as the report tables print it (:func:`strokeopt.report.format.format_value` for floats)."""
-    x = float(x)
-    if math.isinf(x):
-        return "unbounded"
-    if x == 0:
-        return "0"
-    if abs(x) >= 10 ** (digits + 1) or abs(x) < 10 ** -(digits - 1):
-        return f"{x:.{digits - 1}e}"
-    return f"{x:.{digits}g}" if abs(x) >= 10**digits else f"{x:.{max(digits - 1 - int(math.floor(math.log10(abs(x)))), 0)}f}"
 
 
 def _with_terms(req: SolveRequest, best: Outcome) -> Outcome:

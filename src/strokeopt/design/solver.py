@@ -11,6 +11,8 @@ import numpy as np
 
 import casadi as ca
 
+from .._stdout import stdout_to
+
 #: Default IPOPT options (plain dict, passed through to CasADi's nlpsol).
 DEFAULT_SOLVER_OPTIONS = {
     "expand": True,
@@ -65,42 +67,8 @@ def solve_nlp(nlp, options: dict):
     nums = nlp.numbers
     args = dict(x0=nums.x0, lbx=nums.lbx, ubx=nums.ubx, lbg=nums.lbg, ubg=nums.ubg, p=nums.p)
     if plugin == "bonmin" and not options.get("ipopt.print_level", 0):
-        with _quiet_stdout():  # Bonmin's branch-and-bound log ignores its log-level options
+        with stdout_to(None):  # Bonmin's branch-and-bound log ignores its log-level options
             sol = solver(**args)
     else:
         sol = solver(**args)
     return sol, solver.stats(), solver
-
-
-class _quiet_stdout:
-    """Silence the C-level stdout (file descriptor 1) for a block."""
-
-    def __enter__(self):
-        import os
-        import sys
-
-        sys.stdout.flush()
-        self._saved = os.dup(1)
-        self._null = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(self._null, 1)
-        # CasADi routes part of its plugins' printing through Python's sys.stdout
-        self._py = sys.stdout
-        sys.stdout = open(os.devnull, "w")
-        return self
-
-    def __exit__(self, *exc):
-        import ctypes
-        import os
-
-        try:  # C stdio buffers: flush them while fd 1 still points to /dev/null
-            ctypes.CDLL(None).fflush(None)
-        except (OSError, AttributeError):
-            pass
-        import sys
-
-        os.dup2(self._saved, 1)
-        os.close(self._saved)
-        os.close(self._null)
-        sys.stdout.close()
-        sys.stdout = self._py
-        return False

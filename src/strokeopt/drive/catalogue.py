@@ -141,7 +141,7 @@ class Belt:
     width: float
     width_factor: float
     breaking_tension: dict = field(default_factory=dict)  # cord -> N
-    tensile_stiffness: dict = field(default_factory=dict)  # cord -> EA [N per unit strain] (servo.py's belt spring)
+    tensile_stiffness: dict = field(default_factory=dict)  # cord -> EA [N per unit strain] (servo/plant.py's belt spring)
 
 
 @dataclass(frozen=True)

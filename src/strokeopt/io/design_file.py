@@ -32,15 +32,14 @@ as ``position / pulley radius`` (0 at the handover position).
 from __future__ import annotations
 
 import json
-import math
 import os
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from ..design.collocation import Mesh, MoveSolution, move_piece
 from ..errors import ProblemError
+from .plain import to_json
 from ..motion.stroke import StrokeFunction, dwell_piece
 
 
@@ -80,35 +79,13 @@ def write_design(design, out_dir: str | Path, resolution_deg: float = 0.1) -> li
     out.mkdir(parents=True, exist_ok=True)
     data = design_json(design, resolution_deg)
     p_json = out / "design.json"
-    p_json.write_text(_json_text(data) + "\n", encoding="utf-8")
+    p_json.write_text(to_json(data) + "\n", encoding="utf-8")
     p_csv = out / "cam_table.csv"
     table = cam_table(design, resolution_deg)
     header = ",".join(table)
     np.savetxt(p_csv, np.column_stack(list(table.values())), delimiter=",", header=header, comments="",
                fmt=["%.1f", "%.6f", "%.6f", "%.4f", "%.5f"])
     return [p_json, p_csv]
-
-
-def _plain(obj: Any, where: str = "") -> Any:
-    """JSON-ready values: infinities become None, NaN is an error (the rule of ``strokeopt.report.format.to_json``)."""
-    if isinstance(obj, dict):
-        return {k: _plain(v, f"{where}.{k}" if where else str(k)) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_plain(v, f"{where}[{i}]") for i, v in enumerate(obj)]
-    if isinstance(obj, (np.floating, float)):
-        x = float(obj)
-        if math.isnan(x):
-            raise ValueError(f"NaN in report field {where!r}: refusing to report it")
-        return None if math.isinf(x) else x
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    return obj
-
-
-def _json_text(obj: Any) -> str:
-    return json.dumps(_plain(obj), indent=2, allow_nan=False)
 
 
 def check_out_dir(path: str | Path, option: str = "--out") -> Path:

@@ -1,1 +1,6 @@
-"""report"""
+"""Every text table and every figure; computing packages return data, this package prints and draws it.
+
+* format.py   plain-text tables (JSON and the number format come from :mod:`strokeopt.io.plain`)
+* figures.py  what every figure shares
+* motion.py, drive.py, design.py, contact.py, servo.py  one module per area, in data-flow order
+"""
