@@ -79,7 +79,7 @@ def apply_drive_options(args, fix_in_design: bool = False) -> None:
                 raise ProblemError(design, name, f"the design was solved with {name} {value}, but --set "
                                                  f"{forced[path][0]} forces another: omit the --set or solve "
                                                  "the design for it")
-            setattr(args, name, [value] if isinstance(given, list) else value)
+            setattr(args, name, [value] if getattr(args, "drive_lists", False) else value)
         args.drive_from = f"the design file {design}"
     else:
         given = [n for n in DRIVE_FIELDS if getattr(args, n, None)]

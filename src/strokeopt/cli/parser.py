@@ -35,6 +35,7 @@ def _drive_options(p: argparse.ArgumentParser, design: str, repeatable: bool = F
     p.add_argument("--design", metavar="DESIGN_JSON",
                    help=f"a design.json of 'strokeopt solve --out': its stitch rate, motor and pulley; {design}. "
                         "A --spm, --motor, --pulley-teeth or --set asking for other values is an error")
+    p.set_defaults(drive_lists=repeatable)
 
 
 def _stroke_options(p: argparse.ArgumentParser, sweep: bool = False, law: bool = True) -> None:
