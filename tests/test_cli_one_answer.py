@@ -181,7 +181,7 @@ def test_every_json_has_a_status(capsys, reference_path, argv, code, status):
     assert data["status"] == status
 
 
-def test_verify_status_and_json_of_the_mesh_study_are_documented(capsys):
+def test_statuses_and_exit_codes_are_documented(capsys):
     with pytest.raises(SystemExit):
         main(["--help"])
     out = " ".join(capsys.readouterr().out.split())
