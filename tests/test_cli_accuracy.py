@@ -168,10 +168,10 @@ def test_accuracy_uses_the_drive_of_the_design(capsys, reference_path, tmp_path)
     path = tmp_path / "design.json"
     assert main(["accuracy", str(reference_path), "--design", str(path), "--json", "--plot", "none"]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert data["drive_from_design"]["pulley_teeth"] == 22
+    assert data["drive"]["pulley_teeth"] == 22 and data["drive"]["from"] == f"the design file {path}"
     # the whole report is of the design's stroke, not of the problem's law
     assert data["label"].startswith("optimal") and data["handover_error_mm"] > 0
-    assert data["drive_from_design"]["motor"] == data["motor"] == z22.drive.motor
+    assert data["drive"]["motor"] == data["motor"] == z22.drive.motor
     assert data["pulley_pitch_diameter_mm"] == pytest.approx(22 * 3 / 3.141592653589793, rel=1e-3)  # GT3: 3 mm pitch
     # the optimal row is the design's stroke on the design's drive
     _, stroke = read_design(path)

@@ -130,7 +130,9 @@ def test_verify_help_example_writes_what_it_reads(capsys):
     with pytest.raises(SystemExit):
         main(["verify", "--help"])
     out = " ".join(capsys.readouterr().out.split())
-    assert "strokeopt solve problems/deco2000_needle_bar.toml --out out && strokeopt verify out/design.json" in out
+    assert ("strokeopt solve problems/deco2000_needle_bar.toml --out out && strokeopt verify "
+            "problems/deco2000_needle_bar.toml --design out/design.json") in out
+    assert "verify DESIGN.json" in out  # the older form, still accepted, is named
     assert "_verify_<scene>.png" in out
 
 

@@ -109,10 +109,14 @@ def test_problem_without_drive_section_exit_2(capsys, write_problem):
 
 
 def test_set_override_reaches_the_drive(capsys, reference_path):
-    data, _ = _json(capsys, ["size", str(reference_path), "--json", "--plot", "none", "--motor", "055U2B30",
-                             "--pulley-teeth", "28", "--spm", "600", "--set", "drive.peak_limit_pct=100"])
+    code = main(["size", str(reference_path), "--json", "--plot", "none", "--motor", "055U2B30",
+                 "--pulley-teeth", "28", "--spm", "600", "--set", "drive.peak_limit_pct=100"])
+    data = json.loads(capsys.readouterr().out)
     c = data["candidates"][0]
-    assert data["inputs"]["peak_limit_pct"] == 100 and not c["feasible"] and c["binding"] == "overload"
+    # the torque limit min(motor peak 5.5, 100 % x rated 1.2) = 1.2 N m binds, named once (not as 'overload')
+    assert code == 1 and data["status"] == "infeasible"
+    assert data["inputs"]["peak_limit_pct"] == 100 and not c["feasible"] and c["binding"] == "peak_torque"
+    assert c["torque_limit_N_m"] == pytest.approx(1.2)
 
 
 def test_problem_motor_and_belt_must_be_in_the_catalogue(capsys, reference_path):

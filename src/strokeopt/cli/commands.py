@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ..errors import ProblemError
-from .common import _emit, progress_bar, _load, _plot_path, _spm_value, _write_figure
+from .common import _emit, drive_used, progress_bar, _load, _plot_path, _write_figure
 
 
 def cmd_laws(args) -> int:
@@ -16,7 +16,7 @@ def cmd_laws(args) -> int:
 
     rows = law_table()
     if args.json:
-        _emit(to_json({"laws": rows}))
+        _emit(to_json({"status": "ok", "laws": rows}))
         return 0
     for r in rows:
         r["params"] = ", ".join(f"{k} = {v:g}" for k, v in r["params"].items()) or None
@@ -32,20 +32,28 @@ def cmd_kinematics(args) -> int:
     from ..report.motion import kinematics_summary, kinematics_text
     from ..report.format import to_json
 
+    from ..report.format import drive_text
+
     problem = _load(args)
-    stroke = problem.stroke()
+    stroke = args.design_stroke or problem.stroke()
     summary = kinematics_summary(problem, stroke, problem.spm)
+    if args.design_stroke is not None:  # the table's law column: the design's stroke, not the file's law
+        for row in summary["intervals"] + summary["moves"]:
+            if row.get("law") is not None:
+                row["law"] = stroke.label
+    summary = {"status": "ok", **summary, "drive": drive_used(args, problem)}
     if args.json:
         _emit(to_json(summary))
     else:
         print(kinematics_text(summary))
+        print(drive_text(summary["drive"]))
     _write_figure(lambda p: plot_kinematics(problem, stroke, problem.spm, p), _plot_path(args, "kinematics"), args)
     return 0
 
 
 def cmd_size(args) -> int:
     from ..drive.sizing import optimal_radius, size_drive
-    from ..report.drive import plot_sizing, sizing_text
+    from ..report.drive import plot_sizing, sizing_text, sizing_verdict
     from ..report.format import to_json
 
     problem = _load(args)
@@ -54,8 +62,13 @@ def cmd_size(args) -> int:
     catalogue = problem.drive.catalogue(args.catalogue)
     progress = progress_bar(args, "max spm", "pair", when=args.max_spm)
     sizing = size_drive(problem, catalogue=catalogue, motors=args.motor, teeth=args.pulley_teeth,
-                        find_max_spm=args.max_spm, progress=progress)
-    report = sizing.to_dict(explain=args.explain)
+                        find_max_spm=args.max_spm, progress=progress, stroke=args.design_stroke)
+    feasible = any(c.feasible for c in sizing.candidates)
+    report = {"status": "ok" if feasible else "infeasible", **sizing.to_dict(explain=args.explain),
+              "drive": {"motors": args.motor or "every catalogue motor",
+                        "pulley_teeth": args.pulley_teeth or "the problem's pulley_teeth_min..max",
+                        "from": args.drive_from}}
+    report["verdict"] = sizing_verdict(sizing)
     if args.continuous_radius:
         spec = problem.drive
         model = lambda d: catalogue.pulley_inertia(spec.profile, d)  # noqa: E731
@@ -67,6 +80,9 @@ def cmd_size(args) -> int:
     else:
         print(sizing_text(sizing, report, explain=args.explain))
     _write_figure(lambda p: plot_sizing(sizing, None, p), _plot_path(args, "sizing"), args)
+    if not feasible:
+        print(f"strokeopt: {report['verdict']}", file=sys.stderr)
+        return 1
     return 0
 
 
@@ -77,7 +93,8 @@ def cmd_bench(args) -> int:
 
     results = run_benchmarks(args.only)
     if args.json:
-        _emit(to_json({"benchmarks": [r.as_dict() for r in results]}))
+        missed = any(r.meets_target is False for r in results)
+        _emit(to_json({"status": "targets missed" if missed else "ok", "benchmarks": [r.as_dict() for r in results]}))
     else:
         print(format_results(results))
     return 0
@@ -88,55 +105,26 @@ def cmd_accuracy(args) -> int:
     from ..report.servo import accuracy_text, plot_accuracy
     from ..servo.accuracy import accuracy_report
 
-    stroke, label, extra = None, "", []
-    if args.design:
-        from ..io.design_file import read_design
-
-        data, stroke = read_design(args.design)
-        if args.spm is not None and abs(_spm_value(args.spm) - float(data["spm"])) > 1e-9:
-            raise ProblemError(args.design, "spm", f"the design was solved at {data['spm']:g} spm, not at {args.spm} "
-                                                   "spm: omit --spm or solve the design at that rate")
-        args.spm = str(data["spm"])
-        label = f"optimal ({data.get('objective', 'design')})"
-        extra = [(label, stroke)]  # its row in the table of the classic laws
-        drive_used = _design_drive(args, data)
     problem = _load(args)
+    stroke, label, extra = args.design_stroke, "", []
+    if stroke is not None:
+        label = f"optimal ({args.design_data.get('objective', 'design')})"
+        extra = [(label, stroke)]  # its row in the table of the classic laws
     progress = progress_bar(args, "laws", "law", when=bool(args.compare_laws or extra))
     # with --design the whole report is of the design's stroke on its drive; the classic laws follow as a table
     report, result = accuracy_report(problem, problem.spm, stroke=stroke, label=label,
                                      compare_laws=args.compare_laws or bool(extra), extra_strokes=extra,
                                      progress=progress)
-    if args.design:
-        report["drive_from_design"] = {"design": str(args.design), **drive_used}
+    report = {"status": report.pop("status"), **report, "drive": drive_used(args, problem)}
     if args.json:
         _emit(to_json(report))
     else:
         print(accuracy_text(report))
     _write_figure(lambda p: plot_accuracy(result, p), _plot_path(args, "accuracy"), args)
+    if report["status"] != "ok":
+        print(f"strokeopt: {report['verdict']}", file=sys.stderr)
+        return 1
     return 0
-
-
-def _design_drive(args, data: dict) -> dict:
-    """Make ``args.overrides`` use the motor and pulley a design.json was solved with (the design's
-    stroke is only right on its own drive); a --set forcing another motor or pulley is an error."""
-    from ..io.fields import parse_override
-
-    design = {"motor": data.get("motor"), "pulley_teeth": data.get("pulley_teeth")}
-    keys = {"motor": ("drive", "motor"), "pulley_teeth": ("transmission", "pulley_teeth")}
-    used = {}
-    for name, path in keys.items():
-        value = design[name]
-        if value is None:
-            continue
-        for text in args.overrides:
-            key, forced = parse_override(text)
-            if tuple(key) == path and forced != value:
-                raise ProblemError(args.design, name, f"the design was solved with {name} {value}, but --set {text} "
-                                                      "forces another: omit the --set or solve the design for it")
-        args.overrides.append(f"{'.'.join(path)}={value!r}" if name == "pulley_teeth"
-                              else f'{".".join(path)}="{value}"')
-        used[name] = value
-    return used
 
 
 def cmd_tradeoff(args) -> int:
@@ -157,6 +145,7 @@ def cmd_tradeoff(args) -> int:
         raise ProblemError("--resolution", "", f"must be positive, got {args.resolution!r}")
     progress = progress_bar(args, "tradeoff")
     report = tradeoff(problem, accuracies, strokes=args.strokes, resolution=args.resolution, progress=progress)
+    report = {"status": "ok", **report, "drive": drive_used(args, problem)}
     if args.json:
         _emit(to_json(report))
     else:
@@ -182,11 +171,22 @@ def _scene_name(args, problem) -> str:
     return name
 
 
-def _report_scene(args, problem, scene, result, extra=None, kind: str = "simulate") -> None:
+def _belt_breaking(problem) -> dict:
+    """The belt's breaking load [N] (catalogue, the drive's cord), to print beside a contact-model force."""
+    drive = getattr(problem, "drive", None)
+    if drive is None or drive.belt is None:
+        return {}
+    belt = drive.catalogue().belt(drive.belt, (str(problem.file), "drive.belt"))
+    load = belt.breaking_tension.get(drive.belt_cord)
+    return {} if load is None else {"belt_breaking_load_N": load, "belt": f"{belt.name}, {drive.belt_cord} cord"}
+
+
+def _report_scene(args, problem, scene, result, extra=None, kind: str = "simulate", status: str = "ok") -> int:
     from ..report.contact import plot_scene, scene_text
     from ..report.format import to_json
 
-    summary = {**(extra or {}), **result.summary()}
+    summary = {"status": status, **(extra or {}), **result.summary(), **_belt_breaking(problem),
+               "drive": drive_used(args, problem)}
     if args.verbose:
         print(f"integrator: {result.options.method}, {result.stats['nsteps']} steps, "
               f"{result.stats['n_output']} output points", file=sys.stderr)
@@ -195,6 +195,7 @@ def _report_scene(args, problem, scene, result, extra=None, kind: str = "simulat
     else:
         print(scene_text(problem, scene, summary))
     _write_figure(lambda p: plot_scene(result, p), _plot_path(args, f"{kind}_{scene}"), args)
+    return 0
 
 
 def cmd_simulate(args) -> int:
@@ -213,9 +214,11 @@ def cmd_simulate(args) -> int:
     if args.study == "tolerance":
         if isinstance(args.spm, list):
             raise ProblemError("--spm", "", "the tolerance study runs at one speed, not a range")
+        if args.design_stroke is not None:
+            raise ProblemError("--design", "", "the tolerance study runs the problem's law: omit --design or --study")
         study = tolerance_study(problem, scene, problem.spm, progress=not args.json)
         if args.json:
-            _emit(to_json(study))
+            _emit(to_json({"status": "ok", **study}))
         else:
             ref = study["reference"]
             print(f"work-precision of scene {scene!r} at {study['spm']:g} spm against a reference at rtol "
@@ -232,8 +235,8 @@ def cmd_simulate(args) -> int:
         onset = lag_onset_spm(rows)
         premature = lag_onset_spm(rows, "premature_release")
         if args.json:
-            _emit(to_json({"scene": scene, "lag_onset_spm": onset, "premature_release_onset_spm": premature,
-                           "rows": rows}))
+            _emit(to_json({"status": "ok", "scene": scene, "lag_onset_spm": onset,
+                           "premature_release_onset_spm": premature, "rows": rows}))
         else:
             print(format_table(rows, SWEEP_COLUMNS, title=f"{problem.name}: scene {scene!r}, speed sweep "
                                                           f"(interval times {problem.timing.interval_times})"))
@@ -247,21 +250,53 @@ def cmd_simulate(args) -> int:
                       f"'premature', 'min gap N mm')")
         _write_figure(lambda p: plot_sweep(rows, p), _plot_path(args, f"sweep_{scene}"), args)
         return 0
-    result = simulate_scene(problem, scene, problem.spm, options=options)
-    _report_scene(args, problem, scene, result)
-    return 0
+    result = simulate_scene(problem, scene, problem.spm, stroke=args.design_stroke, options=options)
+    return _report_scene(args, problem, scene, result)
 
 
 def cmd_verify(args) -> int:
-    from ..contact.verify import load_design, verify
+    from ..contact.verify import DesignStroke, design_problem_file, verify
 
-    design = load_design(args.design, args.problem, args.overrides)
-    args.problem = str(design.problem.file)
-    scene = _scene_name(args, design.problem)
+    if args.design is None:  # verify DESIGN.json [--problem FILE]: the problem recorded in the design
+        from ..io.design_file import read_design
+
+        args.design = args.file
+        args.problem = str(design_problem_file(args.design, read_design(args.design)[0], args.problem))
+    elif args.problem is not None:
+        raise ProblemError("--problem", "", f"give the problem once: as {args.file} with --design, or as --problem "
+                                            "with a DESIGN.json argument")
+    else:
+        args.problem = args.file
+    problem = _load(args)
+    design = DesignStroke(problem, args.design_stroke, problem.spm, str(args.design), args.design_data.get("objective"))
+    scene = _scene_name(args, problem)
     result = verify(design, scene, _sim_options(args))
-    _report_scene(args, design.problem, scene, result, {"design": str(args.design), "objective": design.objective},
-                  kind="verify")
+    premature = result.summary().get("premature_release")
+    status = "verification failed" if premature else "ok"
+    _report_scene(args, problem, scene, result, {"design": str(args.design), "objective": design.objective},
+                  kind="verify", status=status)
+    if premature:
+        print("strokeopt: verification failed: gap N closes before the impact (premature needle release)",
+              file=sys.stderr)
+        return 1
     return 0
+
+
+def _servo_handover_check(problem):
+    """The solve's handover check: the full servo simulation of the design on its motor and pulley (the
+    number `strokeopt accuracy --design` prints). Composed here: the design package does not import servo."""
+    if getattr(problem, "servo", None) is None or getattr(problem, "drive", None) is None:
+        return None
+
+    def check(design):
+        from ..servo.accuracy import stroke_accuracy
+
+        radius = None if design.pulley_teeth is not None else design.radius
+        result = stroke_accuracy(problem, design.stroke, design.spm, motor=design.motor_spec,
+                                 pulley_teeth=design.pulley_teeth, radius=radius)
+        return result.handover_error, "full servo simulation"
+
+    return check
 
 
 def cmd_solve(args) -> int:
@@ -272,11 +307,12 @@ def cmd_solve(args) -> int:
     from ..io.design_file import check_out_dir
     from ..report.design import design_summary, design_text
     from ..report.design import plot_design_sweep, plot_mesh_study
+    from ..report.format import drive_text
     from ..report.motion import plot_kinematics
     from ..report.format import format_table, to_json
 
     sweep = None
-    if args.spm is not None and ":" in args.spm:
+    if args.spm is not None and ":" in args.spm and args.design is None:  # with --design: refused by _load
         from ..io.ranges import parse_spm_range
 
         sweep = parse_spm_range(args.spm)
@@ -285,12 +321,13 @@ def cmd_solve(args) -> int:
         raise ProblemError("--objective", "", f"{args.objective!r} is not one of {', '.join(OBJECTIVES)}")
     if args.out is not None:
         check_out_dir(args.out)  # before the solve, not after it
-    problem = _load(args)
+    problem = _load(args, fix_in_design=True)
     progress = progress_bar(args, "solve", "solve")
     if args.study == "mesh":
         rows = mesh_study(problem, objective=args.objective, progress=progress and (lambda it: progress(it, "mesh")))
         if args.json:
-            _emit(to_json({"problem": problem.name, "spm": problem.spm, "study": "mesh", "rows": rows}))
+            _emit(to_json({"status": "ok", "problem": problem.name, "spm": problem.spm, "study": "mesh",
+                           "drive": drive_used(args, problem), "rows": rows}))
         else:
             print(f"{problem.name} at {problem.spm:g} spm: the same design on each mesh (file's motor and pulley); "
                   f"error against the last (finest) mesh")
@@ -306,9 +343,9 @@ def cmd_solve(args) -> int:
         best = fastest_feasible(rows)
         at_end = best is not None and all(r["feasible"] for r in rows)  # the sweep found no limit
         if args.json:
-            _emit(to_json({"problem": problem.name, "objective": args.objective or
-                           (problem.design.objective if problem.design else None), "rows": rows,
-                           "fastest_feasible_spm": best, "fastest_feasible_is_sweep_end": at_end}))
+            _emit(to_json({"status": "ok" if best is not None else "infeasible", "problem": problem.name,
+                           "objective": args.objective or (problem.design.objective if problem.design else None),
+                           "rows": rows, "fastest_feasible_spm": best, "fastest_feasible_is_sweep_end": at_end}))
         else:
             print(format_table(rows, [("spm", "spm"), ("feasible", "feasible"), ("objective_value", "objective"),
                                       ("motor", "motor"), ("pulley_teeth", "z"), ("peak_torque_N_m", "peak N m"),
@@ -319,14 +356,24 @@ def cmd_solve(args) -> int:
                   f"\nfastest feasible stitch rate: >= {best:g} spm (the end of the sweep; every rate was feasible)"
                   if at_end else f"\nfastest feasible stitch rate: {best:g} spm")
         _write_figure(lambda p: plot_design_sweep(rows, p), _plot_path(args, "solve_sweep"), args)
+        if best is None:
+            print("strokeopt: infeasible: no stitch rate of the sweep meets every limit (column 'why not')",
+                  file=sys.stderr)
+            return 1
         return 0
     design = solve_design(problem, objective=args.objective, verbose=args.verbose,
-                          progress=progress and (lambda it: progress(it, "motors")))
+                          progress=progress and (lambda it: progress(it, "motors")),
+                          handover_check=_servo_handover_check(problem))
     comparison = compare_with_laws(design)
+    chosen = drive_used(args, problem, design.motor, design.pulley_teeth)
+    if problem.design is not None and (problem.design.motor_choice != "fixed" or problem.design.pulley != "fixed"):
+        chosen["from"] = (f"the solve's choice: design.motor_choice = {problem.design.motor_choice}, design.pulley "
+                          f"= {problem.design.pulley}")
     if args.json:
-        _emit(to_json({**design_summary(design), "comparison": comparison}))
+        _emit(to_json({**design_summary(design), "drive": chosen, "comparison": comparison}))
     else:
         print(design_text(design, comparison))
+        print(drive_text(chosen))
     if args.out is not None:
         written = design.write(args.out)
         law_stroke = problem.stroke(design.spm)

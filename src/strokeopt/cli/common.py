@@ -26,14 +26,110 @@ def _spm_value(text: str) -> float:
     return value
 
 
-def _load(args):
+#: What --motor and --pulley-teeth set: the problem field, and for ``solve`` the [design] choice that fixes it.
+DRIVE_FIELDS = {"motor": ("drive.motor", "design.motor_choice"),
+                "pulley_teeth": ("transmission.pulley_teeth", "design.pulley")}
+
+
+def _option(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+def apply_drive_options(args, fix_in_design: bool = False) -> None:
+    """One mechanism for the drive of every command: ``--design FILE`` (its stitch rate, stroke, motor and
+    pulley), ``--motor NAME`` and ``--pulley-teeth Z`` become ``--set`` overrides of the problem (with
+    ``fix_in_design``, the solve's, also ``design.motor_choice="fixed"`` / ``design.pulley="fixed"``).
+    A second option asking for another value (``--set``, ``--spm``, or --motor against the design) is an
+    error naming both. Repeatable options (``size``'s filters) stay lists. Sets ``args.drive_from`` (where
+    the drive comes from), ``args.design_data`` and ``args.design_stroke`` (None without --design)."""
+    from ..io.fields import parse_override
+
+    if getattr(args, "drive_from", None) is not None:
+        return
+    design = getattr(args, "design", None)
+    args.design_data = args.design_stroke = None
+    forced = {}
+    for text in args.overrides:
+        key, value = parse_override(text)
+        forced[".".join(str(k) for k in key)] = (text, value)
+    if design is not None:
+        from ..io.design_file import read_design
+
+        data, args.design_stroke = read_design(design)
+        args.design_data = data
+        spm = getattr(args, "spm", None)
+        if spm is not None and ":" in str(spm):
+            raise ProblemError(design, "spm", f"a design is one stitch rate ({data['spm']:g} spm): --spm {spm} is a "
+                                              "sweep; omit --spm")
+        if spm is not None and abs(_spm_value(spm) - float(data["spm"])) > 1e-9:
+            raise ProblemError(design, "spm", f"the design was solved at {data['spm']:g} spm, not at {spm} "
+                                              "spm: omit --spm or solve the design at that rate")
+        args.spm = repr(float(data["spm"]))
+        for name, (path, _) in DRIVE_FIELDS.items():
+            value = data.get(name)
+            if value is None:
+                continue
+            given = getattr(args, name, None)
+            for other in (given if isinstance(given, list) else [given]):
+                if other is not None and other != value:
+                    raise ProblemError(design, name, f"the design was solved with {name} {value}, but "
+                                                     f"{_option(name)} {other} asks for another: omit "
+                                                     f"{_option(name)} or solve the design for it")
+            if path in forced and forced[path][1] != value:
+                raise ProblemError(design, name, f"the design was solved with {name} {value}, but --set "
+                                                 f"{forced[path][0]} forces another: omit the --set or solve "
+                                                 "the design for it")
+            setattr(args, name, [value] if getattr(args, "drive_lists", False) else value)
+        args.drive_from = f"the design file {design}"
+    else:
+        given = [n for n in DRIVE_FIELDS if getattr(args, n, None)]
+        args.drive_from = f"{', '.join(_option(n) for n in given)} on the command line" if given else "the problem file"
+    where = design if design is not None else None
+    for name, (path, choice) in DRIVE_FIELDS.items():
+        value = getattr(args, name, None)
+        if value is None or isinstance(value, list):
+            continue
+        option = f"--design {design}" if design is not None else f"{_option(name)} {value}"
+        if path in forced and forced[path][1] != value:
+            raise ProblemError(where or _option(name), name, f"{option} and --set {forced[path][0]} ask for "
+                                                             f"different values: give one of them")
+        if fix_in_design and choice in forced and forced[choice][1] != "fixed":
+            raise ProblemError(where or _option(name), name, f"{option} fixes the {name.replace('_', ' ')}, but "
+                                                             f"--set {forced[choice][0]} asks the solve to choose it: "
+                                                             "give one of them")
+        args.overrides.append(f'{path}="{value}"' if isinstance(value, str) else f"{path}={value!r}")
+        if fix_in_design:
+            args.overrides.append(f'{choice}="fixed"')
+
+
+def drive_used(args, problem, motor=None, pulley_teeth=None) -> dict:
+    """The motor and pulley a command used and where they come from (every report says so);
+    ``motor``/``pulley_teeth`` replace the problem's (a solve's choice)."""
+    drive = getattr(problem, "drive", None)
+    return {"motor": motor or (drive.motor if drive is not None else None),
+            "pulley_teeth": pulley_teeth or problem.pulley_teeth,
+            "from": getattr(args, "drive_from", None) or "the problem file"}
+
+
+def _load(args, fix_in_design: bool = False):
     from ..motion.laws import make_law
     from ..io.problem_file import load_problem
 
+    apply_drive_options(args, fix_in_design)
     overrides = list(args.overrides)
     if getattr(args, "spm", None) is not None and not isinstance(args.spm, list):
         overrides.append(f"machine.spm={_spm_value(args.spm)!r}")
-    problem = load_problem(args.problem, overrides)
+    try:
+        problem = load_problem(args.problem, overrides)
+    except ProblemError as exc:  # an option's override that the problem has no field for: name the option
+        options = [n for n in DRIVE_FIELDS if getattr(args, n, None) is not None]
+        for name in options:
+            section = DRIVE_FIELDS[name][0].split(".")[0]
+            if exc.field == section and "no such field" in exc.message:
+                by = "--design" if getattr(args, "design", None) else _option(name)
+                raise ProblemError(args.problem, section, f"{by} needs a [{section}] section in the problem "
+                                                          "file, which has none") from None
+        raise
     law_name = getattr(args, "law", None)
     chi = getattr(args, "chi", None)
     if law_name is not None or chi is not None:

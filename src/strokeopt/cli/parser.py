@@ -17,8 +17,25 @@ def _problem_parent() -> argparse.ArgumentParser:
                    help="override a value of the problem file, validated like the file "
                         "(repeatable; arrays 1-based: --set 'timing.intervals[2].law=poly5')")
     p.add_argument("--json", action="store_true", help="print only JSON on stdout (for scripts)")
-    p.add_argument("--verbose", action="store_true", help="print solver and integrator output")
     return p
+
+
+def _verbose_option(p: argparse.ArgumentParser, what: str) -> None:
+    """--verbose, only on the commands that have solver or integrator output to show."""
+    p.add_argument("--verbose", action="store_true", help=f"print {what}")
+
+
+def _drive_options(p: argparse.ArgumentParser, design: str, repeatable: bool = False) -> None:
+    """--motor, --pulley-teeth and --design: the same meaning on every command (cli/common.apply_drive_options)."""
+    more = " (repeatable: only these)" if repeatable else ""
+    p.add_argument("--motor", action="append" if repeatable else "store", metavar="NAME",
+                   help=f"catalogue motor of the drive{more}; the same as --set drive.motor=NAME")
+    p.add_argument("--pulley-teeth", type=int, action="append" if repeatable else "store", metavar="Z",
+                   help=f"pulley tooth count{more}; the same as --set transmission.pulley_teeth=Z")
+    p.add_argument("--design", metavar="DESIGN_JSON",
+                   help=f"a design.json of 'strokeopt solve --out': its stitch rate, motor and pulley; {design}. "
+                        "A --spm, --motor, --pulley-teeth or --set asking for other values is an error")
+    p.set_defaults(drive_lists=repeatable)
 
 
 def _stroke_options(p: argparse.ArgumentParser, sweep: bool = False, law: bool = True) -> None:
@@ -49,8 +66,17 @@ def build_parser() -> argparse.ArgumentParser:
         description="Design servo-driven reciprocating mechanisms (electronic cams): motion laws, "
                     "kinematics, drive sizing, optimal strokes and contact-model verification.",
         epilog="Start with: strokeopt solve problems/deco2000_needle_bar.toml  "
-               "(each command has --help with an example).",
+               "(each command has --help with an example). "
+               "Exit codes: 0 success; 1 a solve, a check or a verification that failed (the verdict says which "
+               "limit); 2 bad input (one line naming the file, the field and what is wrong). "
+               "Every --json report has a 'status': 'ok'; 'optimal' or 'acceptable' (solve: IPOPT's verdict); "
+               "'infeasible' (size, a solve sweep: no candidate or rate passes); 'limits exceeded' (solve, accuracy: "
+               "a limit is broken, exit 1); 'verification failed' (verify: premature needle release, exit 1); "
+               "'targets missed' (bench).",
     )
+    from .. import __version__
+
+    parser.add_argument("--version", action="version", version=f"strokeopt {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     problem = _problem_parent()
 
@@ -67,6 +93,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "a figure of position, velocity, acceleration and jerk over the cam angle.",
                        epilog="Example: strokeopt kinematics problems/deco2000_needle_bar.toml --spm 600 --law poly5")
     _stroke_options(p)
+    _drive_options(p, "the design's optimal stroke replaces the problem's law")
     _plot_option(p, "kinematics")
     p.set_defaults(run=cmd_kinematics)
 
@@ -78,10 +105,10 @@ def build_parser() -> argparse.ArgumentParser:
                                    "and breaking checks (thesis appendix 2). The load is the [drive] section of the "
                                    "problem: moving mass, gravity, load forces.",
                        epilog="Example: strokeopt size problems/deco2000_needle_bar.toml --spm 600 --max-spm "
-                              "--motor 055U2B30 --explain")
+                              "--motor 055U2B30 --explain. Exit code 1 (status 'infeasible') when no pair passes "
+                              "every check; the verdict line names the binding limit.")
     _stroke_options(p)
-    p.add_argument("--motor", action="append", metavar="NAME", help="only this catalogue motor (repeatable)")
-    p.add_argument("--pulley-teeth", type=int, action="append", metavar="Z", help="only this pulley (repeatable)")
+    _drive_options(p, "its optimal stroke replaces the problem's law", repeatable=True)
     p.add_argument("--catalogue", action="append", default=[], metavar="FILE",
                    help="an extra catalogue file (motors, pulleys, belts; repeatable)")
     p.add_argument("--max-spm", action="store_true",
@@ -108,6 +135,9 @@ def build_parser() -> argparse.ArgumentParser:
                               "strokeopt solve problems/known_optima/min_jerk.toml")
     p.add_argument("--objective", help="objective (overrides design.objective of the file)")
     _stroke_options(p, sweep=True, law=False)
+    _drive_options(p, "the solve re-solves the stroke at that rate on that drive. --motor/--pulley-teeth fix the "
+                      "motor/pulley (the same as --set design.motor_choice='\"fixed\"' / design.pulley='\"fixed\"')")
+    _verbose_option(p, "IPOPT's (and Bonmin's) output of the solve")
     p.add_argument("--out", metavar="DIR", help="write design.json, cam_table.csv (0.1 deg) and stroke.png into DIR")
     p.add_argument("--study", choices=("mesh",), help="'mesh': objective error, violation between nodes and time "
                                                       "over mesh sizes and collocation degrees")
@@ -137,6 +167,8 @@ def build_parser() -> argparse.ArgumentParser:
                               "strokeopt simulate problems/deco2000_needle_bar.toml --set "
                               "model.springs.k2.stiffness_N_m=1240 --set model.contacts.c32.gap_mm=6.5")
     _stroke_options(p, sweep=True)
+    _drive_options(p, "the design's optimal stroke is simulated (the contact model itself has no motor or belt)")
+    _verbose_option(p, "the integrator's statistics")
     _simulation_arguments(p)
     p.add_argument("--study", choices=("tolerance",),
                    help="'tolerance': error of impact velocity and release angle against a tight reference vs CPU "
@@ -146,17 +178,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(run=cmd_simulate)
 
     p = sub.add_parser("verify", help="simulate a scene with the stroke of a design.json (written by the design solve)",
-                       description="Re-simulate an optimised stroke: read DESIGN.json (its exact stroke, speed and "
-                                   "problem file) and integrate a scene of the problem's contact model with it, "
-                                   "reporting the same results as 'simulate'.",
+                       description="Re-simulate an optimised stroke: read the design (its exact stroke, speed, motor, "
+                                   "pulley and problem file) and integrate a scene of the problem's contact model with "
+                                   "it, reporting the same results as 'simulate'. Two forms: 'verify PROBLEM --design "
+                                   "DESIGN.json' (like every other command) and 'verify DESIGN.json' (the problem "
+                                   "recorded in the design, or --problem FILE). Exit code 1 (status 'verification "
+                                   "failed') when the needle is released prematurely.",
                        epilog="Example: strokeopt solve problems/deco2000_needle_bar.toml --out out && "
-                              "strokeopt verify out/design.json --scene release")
-    p.add_argument("design", metavar="DESIGN.json", help="design file written by the design solve")
-    p.add_argument("--problem", help="problem file (default: the problem_file recorded in DESIGN.json)")
+                              "strokeopt verify problems/deco2000_needle_bar.toml --design out/design.json "
+                              "--scene release")
+    p.add_argument("file", metavar="PROBLEM|DESIGN.json",
+                   help="the problem file (with --design), or a design file written by the design solve")
+    p.add_argument("--problem", help="with a DESIGN.json argument: problem file (default: the problem_file "
+                                     "recorded in it)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY.PATH=VALUE",
                    help="override a value of the problem file (e.g. --set model.springs.k2.stiffness_N_m=1240)")
     p.add_argument("--json", action="store_true", help="print only JSON on stdout (for scripts)")
-    p.add_argument("--verbose", action="store_true", help="print integrator output")
+    _drive_options(p, "its optimal stroke is simulated")
+    _verbose_option(p, "the integrator's statistics")
     _simulation_arguments(p)
     p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_verify_<scene>.png; "
                                                   "'none' for no figure)")
@@ -170,13 +209,13 @@ def build_parser() -> argparse.ArgumentParser:
                                    "tracking, belt stretch (inertia and load forces) and encoder quantisation. "
                                    "--compare-laws adds the handover error and the residual vibration of every "
                                    "classic law on the same drive.",
-                       epilog="Example: strokeopt accuracy problems/deco2000_needle_bar.toml --spm 600 --compare-laws")
+                       epilog="Example: strokeopt accuracy problems/deco2000_needle_bar.toml --spm 600 --compare-laws. "
+                              "Exit code 1 (status 'limits exceeded') when the handover error exceeds the "
+                              "requirement or the torque command the torque limit.")
     _stroke_options(p)
     p.add_argument("--compare-laws", action="store_true",
                    help="also report handover error and residual vibration of every classic law")
-    p.add_argument("--design", metavar="DESIGN_JSON",
-                   help="predict for the optimal stroke of a design.json (strokeopt solve --out) on the motor and "
-                        "pulley it was solved with, at its rate; the classic laws follow as a table")
+    _drive_options(p, "the prediction is for its optimal stroke, and the classic laws follow as a table")
     _plot_option(p, "accuracy")
     p.set_defaults(run=cmd_accuracy)
 
@@ -193,6 +232,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--strokes", choices=("both", "classic", "optimal"), default="both",
                    help="which strokes to compare (default both)")
     p.add_argument("--resolution", type=float, default=10.0, help="stitch-rate resolution of the search [spm] (default 10)")
+    _drive_options(p, "(its motor and pulley only: the stroke is solved again at every rate)")
     _plot_option(p, "tradeoff")
     p.set_defaults(run=cmd_tradeoff)
     return parser

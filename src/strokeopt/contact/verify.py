@@ -42,14 +42,21 @@ def load_design(path, problem_file=None, overrides=()) -> DesignStroke:
     also looked for next to the design file); ``overrides`` are ``--set`` texts for it.
     """
     data, stroke = read_design(path)
+    file = design_problem_file(path, data, problem_file)
+    problem = load_problem(file, list(overrides) + [f"machine.spm={float(data['spm'])!r}"])
+    return DesignStroke(problem, stroke, problem.spm, str(path), data.get("objective"))
+
+
+def design_problem_file(path, data: dict, problem_file=None) -> Path:
+    """The problem file of the design ``data`` read from ``path``: ``problem_file`` if given, else the
+    one the design names (a relative name also looked for next to the design file)."""
     problem_file = problem_file or data.get("problem_file")
     if not problem_file:
         raise ProblemError(str(path), "problem_file", "is missing: pass --problem FILE")
     file = Path(problem_file)
     if not file.is_absolute() and not file.exists() and (Path(path).parent / file).exists():
         file = Path(path).parent / file
-    problem = load_problem(file, list(overrides) + [f"machine.spm={float(data['spm'])!r}"])
-    return DesignStroke(problem, stroke, problem.spm, str(path), data.get("objective"))
+    return file
 
 
 def verify(design, scene: str, options: SimulationOptions | None = None) -> SceneResult:

@@ -19,6 +19,7 @@ import numpy as np
 
 from .pins import pin_rows
 from .request import SolveRequest
+from ..drive.checks import torque_limit
 from ..drive.transmission import BeltPulley
 
 
@@ -36,8 +37,8 @@ def pulley_setting(req: SolveRequest) -> tuple[float, float, float, float]:
 
 
 def peak_limit(motor, drive) -> float:
-    """The motor's peak torque, or the drive's overload limit if lower."""
-    return min(motor.peak_torque, drive.limits.peak_limit_pct / 100 * motor.rated_torque)
+    """The motor's torque limit on the drive (:func:`strokeopt.drive.checks.torque_limit`)."""
+    return torque_limit(motor, drive.limits)
 
 
 @dataclass

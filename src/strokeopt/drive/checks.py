@@ -94,6 +94,21 @@ class BeltLoad:
     breaking_load: float  # peak_tension_factor * T_e * safety [N]
 
 
+def torque_limit(motor, limits: DriveLimits) -> float:
+    """The torque limit of ``motor`` on its drive [N m]: ``min(motor peak, drive peak limit x rated)``.
+
+    The one limit every command checks a peak torque against (the ``peak_torque`` check, the
+    design's torque bound, the servo model's saturation).
+    """
+    return min(motor.peak_torque, limits.peak_limit_pct / 100 * motor.rated_torque)
+
+
+def torque_limit_text(motor, limits: DriveLimits) -> str:
+    """How :func:`torque_limit` is made, for a report: ``min(motor peak 5.5 N m, 300 % x rated 1.2 N m)``."""
+    return (f"min(motor peak {motor.peak_torque:g} N m, drive peak limit {limits.peak_limit_pct:g} % x rated "
+            f"{motor.rated_torque:g} N m)")
+
+
 def belt_load(peak_tension, grooves: int, spec: BeltSpec) -> BeltLoad:
     """Apply the catalogue method of thesis appendix 2 to a peak belt tension ``T_e`` [N]."""
     allow = spec.allowable_tension if spec.allowable_tension is not None else spec.method.allowable_tension_for(grooves)
@@ -124,7 +139,7 @@ def build_checks(peak, rms, peak_speed, peak_force, motor, reflected, limits: Dr
     with ``belt``, the belt width and breaking checks (``grooves`` of the pulley)."""
     rpm = 60 / (2 * math.pi)
     out = [
-        Check("peak_torque", float(peak), motor.peak_torque, "N m"),
+        Check("peak_torque", float(peak), torque_limit(motor, limits), "N m"),
         Check("overload", float(100 * peak / motor.rated_torque), limits.peak_limit_pct, "%"),
         Check("rms_torque", float(rms), motor.rated_torque, "N m"),
         Check("peak_speed", peak_speed * rpm, motor.rated_speed * rpm, "rpm"),
@@ -147,8 +162,8 @@ def drive_checks(motor, transmission, load: Load, t, s, v, a, *, limits: DriveLi
 
     ``t`` must run over one whole cycle (0 to the period, both ends included,
     dwells too): the RMS torque is the time average over it. Checks:
-    peak torque vs the motor's peak torque, overload (peak / rated) vs the
-    drive's peak limit, RMS torque vs rated torque, peak speed vs rated speed,
+    peak torque vs the torque limit (:func:`torque_limit`: the lower of the motor's peak torque
+    and the drive's peak limit x rated torque), overload (peak / rated) vs the drive's peak limit, RMS torque vs rated torque, peak speed vs rated speed,
     load-to-rotor inertia ratio, and with ``belt`` the belt width and
     breaking checks of thesis appendix 2 (``grooves`` of the smaller pulley).
     """
@@ -160,5 +175,6 @@ def drive_checks(motor, transmission, load: Load, t, s, v, a, *, limits: DriveLi
 
 
 def binding_check(checks: list[Check]) -> Check:
-    """The check with the smallest margin: the one that binds first."""
-    return min(checks, key=lambda c: c.margin)
+    """The check with the smallest margin: the one that binds first (on a tie the first listed:
+    ``peak_torque`` before ``overload``, which share the drive's limit when it is below the motor's peak)."""
+    return min(checks, key=lambda c: round(c.margin, 12))

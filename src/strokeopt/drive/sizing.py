@@ -56,6 +56,7 @@ class Candidate:
             "pulley_teeth": self.pulley.teeth,
             "pulley_pitch_diameter_mm": self.pulley.pitch_diameter * 1e3,
             "peak_torque_N_m": self.check("peak_torque").value,
+            "torque_limit_N_m": self.check("peak_torque").limit,
             "rms_torque_N_m": self.check("rms_torque").value,
             "overload_pct": self.check("overload").value,
             "peak_speed_rpm": self.check("peak_speed").value,
@@ -181,17 +182,18 @@ def max_spm(kin, spm: float, motor, pulley, load: Load, limits: DriveLimits, bel
     if lo < resolution:
         return None, binding_check(checks_at(resolution)).name
     failing = [c for c in checks_at(hi) if not c.ok]
-    return math.floor(lo / resolution) * resolution, min(failing or checks_at(hi), key=lambda c: c.margin).name
+    return math.floor(lo / resolution) * resolution, binding_check(failing or checks_at(hi)).name
 
 
 def size_drive(problem, spm: float | None = None, *, catalogue=None, motors=None, teeth=None, samples: int = 3601,
-               find_max_spm: bool = False, resolution: float = 1.0, progress=None) -> Sizing:
+               find_max_spm: bool = False, resolution: float = 1.0, progress=None, stroke=None) -> Sizing:
     """Rank every catalogue motor with every allowed pulley for the stroke of ``problem`` at ``spm``.
 
     ``motors``: names to keep (default all); ``teeth``: groove counts to keep
     (default the problem's ``pulley_teeth_min..max``). ``find_max_spm`` adds
     the highest feasible stitch rate of each pair (bisection to ``resolution``).
-    ``progress``: a callable wrapping an iterable (tqdm) for the max-spm search.
+    ``progress``: a callable wrapping an iterable (tqdm) for the max-spm search. ``stroke``: a
+    stroke at ``spm`` to size for (an optimal design's) instead of the problem's law.
     """
     spec = problem.drive
     if spec is None:
@@ -216,7 +218,7 @@ def size_drive(problem, spm: float | None = None, *, catalogue=None, motors=None
             raise ProblemError(spec.file, "drive.pulley_teeth_min", f"no {spec.profile} pulley in the catalogue between "
                                                                    f"{spec.teeth_min} and {spec.teeth_max} teeth")
     belt = spec.belt_spec(cat)
-    stroke = problem.stroke(spm)
+    stroke = stroke if stroke is not None else problem.stroke(spm)
     kin = stroke.sample(samples)
     cands = candidates(kin, chosen, pulleys, spec.load, spec.limits, belt, spm, stroke.period)
     if find_max_spm:

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..contact.events import LAG_THRESHOLD
 from ..contact.studies import lag_onset_spm
+from .format import drive_text
 
 SWEEP_COLUMNS = [("spm", "spm"), ("impact_velocity_m_s", "impact m/s"), ("impact_angle_deg", "impact deg"),
                  ("lag", "lag"), ("lag_end_angle_deg", "lag end deg"), ("min_gap_N_mm", "min gap N mm"),
@@ -53,8 +54,16 @@ def scene_text(problem, scene: str, summary: dict) -> str:
         lines.append(f"needle released at {s['release_angle_deg']:.2f} deg ({verdict})")
     if s["peak_pad_force_N"] is not None:
         lines.append(f"peak pad force: {s['peak_pad_force_N']:.1f} N")
-    lines.append(f"peak force the drive supplies to the {sc.driven}: {s['peak_drive_force_N']:.1f} N")
-    lines.append("peak element forces [N] (on the output grid): " + ", ".join(f"{k} {v:.1f}" for k, v in s["peak_contact_forces_N"].items()))
+    belt = (f"; for comparison, not a check: the belt's breaking load is {s['belt_breaking_load_N']:g} N "
+            f"({s['belt']}), which 'strokeopt solve' and 'size' check the rigid-load belt tension against"
+            if s.get("belt_breaking_load_N") is not None else "")
+    lines.append(f"peak force the drive supplies to the {sc.driven}: {s['peak_drive_force_N']:.1f} N (a stiff-contact "
+                 f"spike of the contact model at one grid point, not a sustained belt load{belt})")
+    lines.append("peak element forces [N] (stiff-contact spikes on the output grid, no limit applies): "
+                 + ", ".join(f"{k} {v:.1f}" for k, v in s["peak_contact_forces_N"].items()))
+    if s.get("drive"):
+        lines.append(drive_text(s["drive"]) + "; the contact model takes the stroke as given and models neither "
+                     "the motor nor the belt")
     sw = "hard switches" if s["smoothing_mm"] == 0 else f"smoothing {s['smoothing_mm']:g} mm"
     lines.append(f"CPU time {s['cpu_time_s']:.3f} s ({s['method']}, rtol {s['rtol']:g}, atol {s['atol']:g}, {sw})")
     return "\n".join(lines)

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+from ..drive.checks import torque_limit_text
 from .format import format_table, format_value
 from ..design.result import Design, move_direction
 from ..design.settings import DesignSettings
@@ -86,11 +87,21 @@ def design_text(design: Design, comparison: list[dict] | None = None) -> str:
                                ("jerk_max_m_s3", "jerk_max m/s3"), ("C_a", "C_a")]))
     if design.checks:
         lines.append("")
-        lines.append(format_table(design.checks, [("name", "check"), ("value", "value"), ("limit", "limit"),
-                                                  ("unit", "unit"), ("margin", "margin"), ("ok", "ok")],
+        verified = [c for c in design.checks if "design_term" in c]
+        cols = [("name", "check"), ("value", "value"), ("limit", "limit"), ("unit", "unit"), ("margin", "margin"),
+                ("ok", "ok")] + ([("design_term", "design term")] if verified else [])
+        lines.append(format_table(design.checks, cols,
                                   title=f"checks (fine grid between collocation nodes; margin = 1 - value/limit; ok: "
                                         f"within the limit + check_tolerance "
                                         f"{100 * (design.settings or DesignSettings()).check_tolerance:g} %)"))
+        lines += [f"{c['name']}: {format_value(c['value'])} mm, the number `strokeopt accuracy --design` prints "
+                  f"(sampled position table, largest error over the handover window, plus one encoder count); "
+                  f"the design term, which the solve constrains (end of the handover move, continuous reference), "
+                  f"gives {format_value(c['design_term'])} mm" for c in verified]
+        limit = next((c for c in design.checks if c["name"] == "peak_torque"), None)
+        if limit is not None and design.motor_spec is not None and design.settings is not None:
+            lines.append(f"torque limit {format_value(limit['limit'])} N m = "
+                         f"{torque_limit_text(design.motor_spec, design.problem.drive.limits)}")
     lines.append("")
     lines.append("active constraints: " + ("; ".join(design.active_constraints) or "none"))
     if comparison:
@@ -140,6 +151,8 @@ def design_summary(design: Design) -> dict:
         "active_constraints": design.active_constraints,
         "solve_time_s": design.solve_time_s,
     }
+    if "peak_torque" in checks:  # min(motor peak, drive peak limit x rated): the limit of every command
+        out["torque_limit_N_m"] = checks["peak_torque"]["limit"]
     full = design.summary()
     for key in ("problem", "problem_file", "cycle_time_s", "pulley_pitch_diameter_mm", "mesh", "checks",
                 "iterations", "notes"):

@@ -11,7 +11,29 @@ import math
 import matplotlib.pyplot as plt
 import numpy as np
 
+from ..drive.checks import torque_limit
 from .format import format_table
+
+
+def sizing_verdict(sizing) -> str:
+    """One line: the best pair, or why none passes (the binding limit of the pair closest to passing)."""
+    best = sizing.candidates[0]
+    b = best.check(best.binding)
+    what = (f"{b.name} {b.value:.4g} {b.unit} against the limit {b.limit:.4g} {b.unit} "
+            f"(margin {b.margin:.3g})")
+    if best.feasible:
+        return f"ok: {best.motor.name} with a {best.pulley.teeth}-tooth pulley ranks first; binding: {what}"
+    closest = max(sizing.candidates, key=lambda c: c.check(c.binding).margin)
+    c = closest.check(closest.binding)
+    counts = {}
+    for cand in sizing.candidates:
+        for chk in cand.checks:
+            if not chk.ok:
+                counts[chk.name] = counts.get(chk.name, 0) + 1
+    failing = ", ".join(f"{n} ({k} of {len(sizing.candidates)})" for n, k in sorted(counts.items(), key=lambda x: -x[1]))
+    return (f"infeasible: no motor and pulley passes every check at {sizing.spm:g} spm; binding limit: {c.name} "
+            f"({closest.motor.name} with {closest.pulley.teeth} teeth, the closest: {c.value:.4g} {c.unit} > "
+            f"limit {c.limit:.4g} {c.unit}); failing checks: {failing}")
 
 
 def sizing_text(sizing, report: dict, explain: bool = False) -> str:
@@ -31,14 +53,20 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
         f"{inp['law']}, {inp['samples']} samples over the whole cycle)",
         f"load: moving mass {inp['moving_mass_kg']:g} kg, gravity {inp['gravity_m_s2']:g} m/s^2 along the "
         f"axis, load forces: {forces}",
-        f"limits: drive peak {inp['peak_limit_pct']:g} % of rated torque, inertia ratio <= "
+        f"limits: torque limit = min(motor peak, drive peak limit {inp['peak_limit_pct']:g} % x rated torque) "
+        f"(column 'limit N m'; overload = peak / rated), inertia ratio <= "
         f"{inp['max_inertia_ratio']:g}; belt {inp['belt']} ({inp['belt_cord']} cord, service factor "
         f"{inp['belt_service_factor']})",
         "ranked: feasible first, then by overload (peak / rated torque); 'binding' = the check with the "
         "least margin\n",
     ]
+    if "drive" in report:
+        d = report["drive"]
+        names = lambda v: ", ".join(map(str, v)) if isinstance(v, list) else v  # noqa: E731
+        lines.insert(3, f"drive: motors {names(d['motors'])}; pulleys {names(d['pulley_teeth'])} (from {d['from']})")
     cols = [("motor", "motor"), ("pulley_teeth", "z"), ("pulley_pitch_diameter_mm", "PD mm"),
-            ("peak_torque_N_m", "peak N m"), ("rms_torque_N_m", "RMS N m"), ("overload_pct", "overload %"),
+            ("peak_torque_N_m", "peak N m"), ("torque_limit_N_m", "limit N m"), ("rms_torque_N_m", "RMS N m"),
+            ("overload_pct", "overload %"),
             ("peak_speed_rpm", "speed rpm"), ("inertia_ratio", "J ratio"), ("feasible", "feasible"),
             ("binding", "binding"), ("margin", "margin")]
     if with_max_spm:
@@ -64,7 +92,8 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
         lines.append(format_table(report["continuous_radius"], [
             ("motor", "motor"), ("pitch_radius_mm", "radius mm"), ("pitch_diameter_mm", "PD mm"),
             ("teeth_equivalent", "teeth (not rounded)"), ("peak_torque_N_m", "peak N m")]))
-    return "\n".join(lines)
+    lines.append(f"\n{report['verdict']}" if "verdict" in report else "")
+    return "\n".join(lines).rstrip()
 
 
 def plot_sizing(sizing, candidate=None, path=None):
@@ -78,7 +107,7 @@ def plot_sizing(sizing, candidate=None, path=None):
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.8), constrained_layout=True)
     m = c.motor
     w = np.linspace(-m.rated_speed, m.rated_speed, 101)
-    drive_peak = min(m.peak_torque, sizing.limits.peak_limit_pct / 100 * m.rated_torque)
+    drive_peak = torque_limit(m, sizing.limits)
     for sign in (1, -1):
         ax1.plot(w * rpm, sign * m.continuous_torque(w), color="tab:green",
                  label="continuous (thermal)" if sign > 0 else None)

@@ -19,3 +19,10 @@ def format_table(rows: list[dict], columns: list[tuple[str, str]], title: str = 
     lines.append("  ".join("-" * w for w in widths))
     lines += ["  ".join(c.rjust(w) for c, w in zip(row, widths)) for row in cells]
     return "\n".join(lines)
+
+
+def drive_text(drive: dict) -> str:
+    """The line every report has: which motor and pulley it used and where they come from."""
+    teeth = drive.get("pulley_teeth")
+    pulley = f"pulley {teeth} teeth" if teeth is not None else "continuous pulley radius"
+    return f"drive: motor {drive.get('motor') or '(none)'}, {pulley} (from {drive['from']})"

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..servo.accuracy import AccuracyResult
-from .format import format_table
+from .format import drive_text, format_table, format_value
 
 
 # --------------------------------------------------------------------------- strokeopt accuracy
@@ -24,11 +24,11 @@ def accuracy_text(report: dict) -> str:
     c = report["contributions_mm"]
     sc = report["signed_contributions_mm"]
     lines = []
-    used = report.get("drive_from_design")
+    used = report.get("drive")
     if used:
+        lines.append(drive_text(used))
+    if used and used["from"].startswith("the design file"):
         lines += [
-            f"drive of the design {used['design']}: motor {used.get('motor', report['motor'])}, pulley "
-            f"{used.get('pulley_teeth', '-')} teeth (from the design file, not the problem file)",
             # The design solve checks the bar error at the end of the handover move only, for a continuous
             # reference (the error as a linear functional of the stroke's acceleration). This report simulates
             # the full loop: the position table sampled (worst of several table phases), the largest error
@@ -53,7 +53,7 @@ def accuracy_text(report: dict) -> str:
         f"modulus {report['margins']['modulus_margin']:.2f}",
         "",
         f"handover error (largest over {report['handover_window_deg']:g} deg after the end of the handover move at "
-        f"{report['handover_angle_deg']:.1f} deg): {report['handover_error_mm']:.4f} mm "
+        f"{report['handover_angle_deg']:.1f} deg): {format_value(report['handover_error_mm'])} mm "
         f"(requirement {report['requirement_mm']:g} mm)",
         f"  servo tracking        {sc['servo_tracking']:+.4f} mm  (pulley {report['pulley_error_at_handover_deg']:.3f} deg)",
         f"  belt stretch          {sc['belt_stretch']:+.4f} mm  (inertia {sc['belt_stretch_inertia']:+.4f}, "
@@ -62,7 +62,8 @@ def accuracy_text(report: dict) -> str:
         f"over the cycle: max error {report['max_error_mm']:.4f} mm, max servo error "
         f"{report['max_servo_error_mm']:.4f} mm, max belt stretch {report['max_belt_stretch_mm']:.4f} mm; "
         f"residual belt vibration in the dwell after the handover {report['residual_vibration_mm']:.4f} mm",
-        f"peak torque command {report['peak_torque_command_N_m']:.3f} N m (limit {report['torque_limit_N_m']:.2f} N m)",
+        f"peak torque command {report['peak_torque_command_N_m']:.3f} N m (torque limit "
+        f"{format_value(report['torque_limit_N_m'])} N m = {report.get('torque_limit_basis', 'min(motor peak, drive peak limit x rated)')})",
         f"  {report['torque_basis']}",
     ]
     if report["torque_limited"]:
@@ -74,6 +75,8 @@ def accuracy_text(report: dict) -> str:
             ("max_error_mm", "max error mm"), ("max_belt_stretch_mm", "max belt mm"),
             ("peak_torque_command_N_m", "peak torque N m"), ("torque_limited", "saturates")],
             title=f"Motion laws at {report['spm']:g} spm on the same drive")]
+    if "verdict" in report:
+        lines += ["", report["verdict"]]
     return "\n".join(lines)
 
 

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..drive.checks import torque_limit_text
 from .loop import (Gains, ServoLoop, build_loop, cycle_grid, loop_margins, periodic_response, reference_signals,
                    tuned_gains)
 from .plant import DriveAxis, axis_from_problem
@@ -223,6 +224,18 @@ def handover_accuracy(problem, stroke=None, spm: float | None = None, *, setting
     return max(results, key=lambda r: r.handover_error)
 
 
+def stroke_accuracy(problem, stroke, spm: float, *, motor=None, pulley_teeth: int | None = None,
+                    radius: float | None = None, label: str = "") -> AccuracyResult:
+    """The full servo simulation of ``stroke`` at ``spm`` on a motor and pulley (default: the
+    problem's; a :class:`~strokeopt.drive.catalogue.ServoMotor`, a tooth count, or a continuous
+    ``radius``): the handover error ``strokeopt accuracy --design`` prints, and the number the
+    command line's solve reports in its check table (the design package does not import servo)."""
+    settings = settings_of(problem)
+    axis = axis_from_problem(problem, settings, motor=motor, pulley_teeth=pulley_teeth, radius=radius)
+    return handover_accuracy(problem, stroke, spm=spm, settings=settings, axis=axis,
+                             gains=tuned_gains(axis, settings), label=label)
+
+
 def residual_vibration_table(problem, spm: float | None = None, strokes=(), *,
                              settings: ServoSettings | None = None, axis: DriveAxis | None = None,
                              gains: Gains | None = None, progress=None) -> list[dict]:
@@ -272,9 +285,21 @@ def accuracy_report(problem, spm: float | None = None, *, stroke=None, label: st
     result = handover_accuracy(problem, stroke, spm=spm, settings=settings, axis=axis, gains=gains, label=label)
     design = getattr(problem, "design", None)
     requirement = design.accuracy if design is not None else 0.5e-3  # digest A.1: within 0.5 mm
+    motor = problem.drive.catalogue().motor(axis.motor)
     report = {"problem": problem.name, **result.summary(), "requirement_mm": requirement * 1e3,
+              "torque_limit_basis": torque_limit_text(motor, problem.drive.limits),
               "torque_basis": TORQUE_BASIS,
               "margins": loop_margins(axis, settings, gains)}
+    broken = []
+    if result.handover_error > requirement:
+        broken.append(f"handover error {result.handover_error * 1e3:.4f} mm > requirement {requirement * 1e3:g} mm")
+    if result.torque_limited:
+        broken.append(f"torque command {result.peak_torque_command:.3f} N m > torque limit {axis.torque_limit:.3f} "
+                      "N m (the drive saturates)")
+    report["status"] = "limits exceeded" if broken else "ok"
+    report["verdict"] = ("limits exceeded: " + "; ".join(broken) if broken else
+                         f"ok: handover error {result.handover_error * 1e3:.4f} mm within {requirement * 1e3:g} mm, "
+                         f"torque command within the torque limit {axis.torque_limit:.3f} N m")
     if compare_laws:
         report["laws"] = residual_vibration_table(problem, spm, extra_strokes, settings=settings, axis=axis,
                                                   gains=gains, progress=progress)

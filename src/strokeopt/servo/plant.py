@@ -22,7 +22,7 @@ belt geometry of ``[servo]`` (:class:`~.settings.ServoSettings`) and returns a
   l1 - half the pulley's wrap``; both pieces are pretensioned springs in
   parallel, ``k = EA/l1 + EA/l2`` with ``EA`` = specific stiffness x width.
 * **Torque limit**: ``min(motor peak torque, drive peak limit x rated
-  torque)``.
+  torque)`` (:func:`strokeopt.drive.checks.torque_limit`, the limit of every command).
 '''
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..drive.checks import torque_limit
 from ..errors import ProblemError
 from .settings import ServoSettings, settings_of
 
@@ -146,5 +147,4 @@ def axis_from_problem(problem, settings: ServoSettings | None = None, *, motor=N
     m = drive.load.moving_mass
     m_red = 1 / (1 / m + radius**2 / j)
     c = 2 * settings.belt_damping_ratio * math.sqrt(k * m_red)
-    limit = min(motor.peak_torque, drive.limits.peak_limit_pct / 100 * motor.rated_torque)
-    return DriveAxis(j, radius, m, k, c, limit, drive.load, motor.name, note)
+    return DriveAxis(j, radius, m, k, c, torque_limit(motor, drive.limits), drive.load, motor.name, note)
