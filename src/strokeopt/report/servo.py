@@ -161,8 +161,10 @@ def plot_tradeoff(report: dict, path: str | Path | None = None):
     ax.margins(x=0.06)
     ax.set_xlabel("required handover accuracy [mm]")
     ax.set_ylabel("highest stitch rate [spm]")
-    ax.set_title(f"{report['problem']}: what accuracy costs in stitch rate\n(classic law {report['law']}; "
-                 f"motor {report['motor']}, {report['pulley_teeth']}-tooth pulley)", fontsize=10)
+    drive = [f"classic law {report['law']}" if report.get("law") else "",
+             f"motor {report['motor']}, {report['pulley_teeth']}-tooth pulley" if report.get("motor") else ""]
+    ax.set_title(f"{report['problem']}: what accuracy costs in stitch rate"
+                 + (f"\n({'; '.join(d for d in drive if d)})" if any(drive) else ""), fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="best", fontsize=8)
     if path is not None:
