@@ -49,7 +49,7 @@ def test_sweep(capsys, reference_path, tmp_path):
     assert fig.stat().st_size > 10_000
     assert main(["simulate", str(reference_path), "--spm", "300:400:50", "--plot", "none"]) == 0
     out = capsys.readouterr().out
-    assert "impact m/s" in out and "lags from 350 spm" in out
+    assert "impact speed m/s" in out and "lags from 350 spm" in out
 
 
 @pytest.mark.slow
@@ -105,11 +105,14 @@ def test_verify_design(capsys, reference_path, tmp_path, monkeypatch):
     data = json.loads(capsys.readouterr().out)
     assert data["design"] == str(path) and data["spm"] == 600 and data["stroke"] == "optimal"
     assert data["impact_velocity_m_s"] > 0 and data["release_angle_deg"] > data["impact_angle_deg"]
-    # the default figure is verify's own, next to (not over) simulate's
+    # --json alone writes no figure; the default figure is verify's own, named by scene, rate and objective
     monkeypatch.chdir(tmp_path)
     assert main(["verify", str(path), "--scene", "release", "--json"]) == 0
+    assert not (tmp_path / "strokeopt-out").exists()
+    assert main(["verify", str(path), "--scene", "release"]) == 0
     capsys.readouterr()
-    assert [f.name for f in (tmp_path / "strokeopt-out").iterdir()] == [f"{reference_path.stem}_verify_release.png"]
+    assert [f.name for f in (tmp_path / "strokeopt-out").iterdir()] == [
+        f"{reference_path.stem}_verify_release_600spm_min_jerk.png"]
 
 
 def test_verify_bad_file(capsys, tmp_path):
@@ -133,7 +136,7 @@ def test_verify_help_example_writes_what_it_reads(capsys):
     assert ("strokeopt solve problems/deco2000_needle_bar.toml --out out && strokeopt verify "
             "problems/deco2000_needle_bar.toml --design out/design.json") in out
     assert "verify DESIGN.json" in out  # the older form, still accepted, is named
-    assert "_verify_<scene>.png" in out
+    assert "_verify_<scene>_<spm>spm_<objective>.png" in out
 
 
 @pytest.mark.parametrize("command", ["simulate", "verify"])

@@ -36,7 +36,7 @@ def test_format_table_aligns_columns_under_their_headers():
     assert lines[0] == "T"
     assert len({len(line) for line in lines[1:]}) == 1  # every row as wide as the header
     assert lines[1].split() == ["a", "mm", "name"]
-    assert lines[-1].split() == ["10.25", "-"]
+    assert lines[-1].split() == ["10.250", "-"]  # one format per column: 1.500 above it
 
 
 def test_kinematics_summary_and_text(reference):

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ..errors import ProblemError
-from .common import _emit, drive_used, progress_bar, _load, _plot_path, _write_figure
+from .common import _emit, _load, _plot_path, _spm_value, _write_figure, drive_used, progress_bar, spm_tag
 
 
 def cmd_laws(args) -> int:
@@ -47,7 +47,8 @@ def cmd_kinematics(args) -> int:
     else:
         print(kinematics_text(summary))
         print(drive_text(summary["drive"]))
-    _write_figure(lambda p: plot_kinematics(problem, stroke, problem.spm, p), _plot_path(args, "kinematics"), args)
+    _write_figure(lambda p: plot_kinematics(problem, stroke, problem.spm, p),
+                  _plot_path(args, "kinematics", spm_tag(problem.spm), stroke.label), args)
     return 0
 
 
@@ -79,7 +80,10 @@ def cmd_size(args) -> int:
         _emit(to_json(report))
     else:
         print(sizing_text(sizing, report, explain=args.explain))
-    _write_figure(lambda p: plot_sizing(sizing, None, p), _plot_path(args, "sizing"), args)
+    best = sizing.candidates[0]  # the figure's pair
+    _write_figure(lambda p: plot_sizing(sizing, None, p),
+                  _plot_path(args, "size", spm_tag(problem.spm), sizing.inputs["law"], best.motor.name,
+                             f"z{best.pulley.teeth}"), args)
     if not feasible:
         print(f"strokeopt: {report['verdict']}", file=sys.stderr)
         return 1
@@ -120,7 +124,9 @@ def cmd_accuracy(args) -> int:
         _emit(to_json(report))
     else:
         print(accuracy_text(report))
-    _write_figure(lambda p: plot_accuracy(result, p), _plot_path(args, "accuracy"), args)
+    tags = [f"design_{extra[0][0]}" if extra else report["label"], report["motor"]]
+    _write_figure(lambda p: plot_accuracy(result, p, report["motor"]),
+                  _plot_path(args, "accuracy", spm_tag(problem.spm), *tags), args)
     if report["status"] != "ok":
         print(f"strokeopt: {report['verdict']}", file=sys.stderr)
         return 1
@@ -150,7 +156,8 @@ def cmd_tradeoff(args) -> int:
         _emit(to_json(report))
     else:
         print(tradeoff_text(report))
-    _write_figure(lambda p: plot_tradeoff(report, p), _plot_path(args, "tradeoff"), args)
+    _write_figure(lambda p: plot_tradeoff(report, p),
+                  _plot_path(args, "tradeoff", args.strokes, report["law"], report["motor"]), args)
     return 0
 
 
@@ -194,7 +201,8 @@ def _report_scene(args, problem, scene, result, extra=None, kind: str = "simulat
         _emit(to_json(summary))
     else:
         print(scene_text(problem, scene, summary))
-    _write_figure(lambda p: plot_scene(result, p), _plot_path(args, f"{kind}_{scene}"), args)
+    what = extra.get("objective") if extra else result.stroke_label  # verify: the design's objective
+    _write_figure(lambda p: plot_scene(result, p), _plot_path(args, kind, scene, spm_tag(result.spm), what), args)
     return 0
 
 
@@ -228,7 +236,8 @@ def cmd_simulate(args) -> int:
             for r in study["rows"]:
                 if "failed" in r:
                     print(f"failed: {r['method']} rtol {r['rtol']:g} smoothing {r['smoothing_mm']:g} mm: {r['failed']}")
-        _write_figure(lambda p: plot_tolerance_study(study, p), _plot_path(args, f"tolerance_{scene}"), args)
+        _write_figure(lambda p: plot_tolerance_study(study, p), _plot_path(args, "simulate_tolerance", scene, spm_tag(problem.spm), problem.stroke().label),
+                      args)
         return 0
     if isinstance(args.spm, list):
         rows = sweep_spm(problem, scene, args.spm, options, progress=not args.json)
@@ -248,7 +257,8 @@ def cmd_simulate(args) -> int:
             if premature is not None:
                 print(f"premature release from {premature:g} spm: gap N closes before the impact (columns "
                       f"'premature', 'min gap N mm')")
-        _write_figure(lambda p: plot_sweep(rows, p), _plot_path(args, f"sweep_{scene}"), args)
+        _write_figure(lambda p: plot_sweep(rows, p),
+                      _plot_path(args, "simulate_sweep", scene, spm_tag(args.spm), problem.stroke().label), args)
         return 0
     result = simulate_scene(problem, scene, problem.spm, stroke=args.design_stroke, options=options)
     return _report_scene(args, problem, scene, result)
@@ -299,17 +309,18 @@ def _servo_handover_check(problem):
     return check
 
 
+def _objective(args, problem) -> str | None:
+    """The objective a solve uses: --objective, else the file's."""
+    return args.objective or (problem.design.objective if problem.design else None)
+
+
 def cmd_solve(args) -> int:
     from ..design.compare import compare_with_laws
     from ..design.objectives import OBJECTIVES
     from ..design.solve import solve_design
     from ..design.studies import fastest_feasible, mesh_study, sweep_design
-    from ..io.design_file import check_out_dir
-    from ..report.design import design_summary, design_text
-    from ..report.design import plot_design_sweep, plot_mesh_study
-    from ..report.format import drive_text
-    from ..report.motion import plot_kinematics
-    from ..report.format import format_table, to_json
+    from ..report.design import design_summary, design_text, plot_design, plot_design_sweep, plot_mesh_study
+    from ..report.format import drive_text, format_table, to_json
 
     sweep = None
     if args.spm is not None and ":" in args.spm and args.design is None:  # with --design: refused by _load
@@ -319,9 +330,7 @@ def cmd_solve(args) -> int:
         args.spm = None
     if args.objective is not None and args.objective not in OBJECTIVES:
         raise ProblemError("--objective", "", f"{args.objective!r} is not one of {', '.join(OBJECTIVES)}")
-    if args.out is not None:
-        check_out_dir(args.out)  # before the solve, not after it
-    problem = _load(args, fix_in_design=True)
+    problem = _load(args, fix_in_design=True)  # (an unwritable --out was refused before: cli.common.check_outputs)
     progress = progress_bar(args, "solve", "solve")
     if args.study == "mesh":
         rows = mesh_study(problem, objective=args.objective, progress=progress and (lambda it: progress(it, "mesh")))
@@ -334,8 +343,9 @@ def cmd_solve(args) -> int:
             print(format_table(rows, [("intervals", "intervals"), ("degree", "degree"), ("variables", "variables"),
                                       ("objective_value", "objective"), ("objective_error_pct", "error %"),
                                       ("violation_between_nodes", "violation between nodes"),
-                                      ("time_s", "time s")]))
-        _write_figure(lambda p: plot_mesh_study(rows, p), _plot_path(args, "mesh_study"), args)
+                                      ("time_s", "build + solve time s")]))
+        _write_figure(lambda p: plot_mesh_study(rows, p),
+                      _plot_path(args, "solve_mesh", spm_tag(problem.spm), _objective(args, problem)), args)
         return 0
     if sweep is not None:
         rows = sweep_design(problem, sweep, objective=args.objective,
@@ -349,13 +359,14 @@ def cmd_solve(args) -> int:
         else:
             print(format_table(rows, [("spm", "spm"), ("feasible", "feasible"), ("objective_value", "objective"),
                                       ("motor", "motor"), ("pulley_teeth", "z"), ("peak_torque_N_m", "peak N m"),
-                                      ("rms_torque_N_m", "RMS N m"), ("solve_time_s", "time s"),
+                                      ("rms_torque_N_m", "RMS N m"), ("solve_time_s", "solve time s"),
                                       ("reason", "why not")],
                                title=f"{problem.name}: optimal design over the stitch rate (warm-started)"))
             print("\nno feasible stitch rate in the sweep" if best is None else
                   f"\nfastest feasible stitch rate: >= {best:g} spm (the end of the sweep; every rate was feasible)"
                   if at_end else f"\nfastest feasible stitch rate: {best:g} spm")
-        _write_figure(lambda p: plot_design_sweep(rows, p), _plot_path(args, "solve_sweep"), args)
+        _write_figure(lambda p: plot_design_sweep(rows, p, _objective(args, problem)),
+                      _plot_path(args, "solve_sweep", spm_tag(sweep), _objective(args, problem)), args)
         if best is None:
             print("strokeopt: infeasible: no stitch rate of the sweep meets every limit (column 'why not')",
                   file=sys.stderr)
@@ -375,14 +386,13 @@ def cmd_solve(args) -> int:
         print(design_text(design, comparison))
         print(drive_text(chosen))
     if args.out is not None:
-        written = design.write(args.out)
-        law_stroke = problem.stroke(design.spm)
-        fig_path = Path(args.out) / "stroke.png"
-        _write_figure(lambda p: plot_kinematics(problem, [design.stroke, law_stroke], design.spm, p), fig_path, args)
-        for path in written:
+        for path in design.write(args.out):
             print(f"written {path}", file=sys.stderr if args.json else sys.stdout)
-    _write_figure(lambda p: plot_kinematics(problem, [design.stroke, problem.stroke(design.spm)], design.spm, p),
-                  _plot_path(args, "solve"), args)
+    # one figure: --plot FILE, else into --out DIR beside design.json, else strokeopt-out/
+    fig_path = _plot_path(args, "solve", spm_tag(design.spm), design.objective)
+    if fig_path is not None and args.plot is None and args.out is not None:
+        fig_path = Path(args.out) / fig_path.name
+    _write_figure(lambda p: plot_design(design, problem.stroke(design.spm), p), fig_path, args)
     if design.status == "limits exceeded":
         print(f"strokeopt: {design.notes[0]}", file=sys.stderr)
         return 1

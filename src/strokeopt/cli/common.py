@@ -3,7 +3,9 @@ paths and writing, and printing JSON (stdout, also while solver logs go to stder
 
 from __future__ import annotations
 
+import re
 import sys
+import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -11,9 +13,6 @@ from .._stdout import stdout_to
 from ..errors import ProblemError
 
 DEFAULT_OUT = Path("strokeopt-out")
-
-
-
 
 
 def _spm_value(text: str) -> float:
@@ -141,12 +140,62 @@ def _load(args, fix_in_design: bool = False):
     return problem
 
 
-def _plot_path(args, default_name: str) -> Path | None:
-    """Where to write the figure: --plot FILE, none with --plot none, else strokeopt-out/<name>."""
+def _slug(text) -> str:
+    """A file-name part of a label: 'modified_sine (chi = 0.095)' -> 'modified_sine_chi0.095'."""
+    text = re.sub(r"\s*=\s*", "", str(text))
+    return re.sub(r"[^A-Za-z0-9.+-]+", "_", text).strip("_")
+
+
+def _plot_path(args, command: str, *tags) -> Path | None:
+    """Where to write the figure: --plot FILE; none with --plot none, or with --json unless --plot asks;
+    else strokeopt-out/<problem>_<command>_<tags>.png, the tags being what distinguishes this figure
+    from another of the same command (scene, stitch rate, law or objective, motor): figures of different
+    runs do not overwrite each other."""
     if args.plot is not None:
         return None if args.plot.lower() == "none" else Path(args.plot)
-    stem = Path(args.problem).stem if hasattr(args, "problem") else "strokeopt"
-    return DEFAULT_OUT / f"{stem}_{default_name}.png"
+    if getattr(args, "json", False):
+        return None
+    stem = Path(args.problem).stem if getattr(args, "problem", None) else "strokeopt"
+    parts = [stem, command, *(_slug(t) for t in tags if t not in (None, ""))]
+    return DEFAULT_OUT / ("_".join(parts) + ".png")
+
+
+def spm_tag(spm) -> str:
+    """The stitch-rate part of a figure name: '600spm', or '400-900-50spm' for a sweep START:STOP:STEP."""
+    if isinstance(spm, str):
+        return spm.replace(":", "-") + "spm"
+    if isinstance(spm, (list, tuple)):
+        step = spm[1] - spm[0] if len(spm) > 1 else 0
+        return f"{spm[0]:g}-{spm[-1]:g}-{step:g}spm"
+    return f"{spm:g}spm"
+
+
+def _probe_dir(directory: Path, option: str, what: str) -> None:
+    """Create ``directory`` (and its parents) and write a scratch file into it, or raise ProblemError."""
+    try:
+        if directory.is_file():
+            raise NotADirectoryError(20, "not a directory")
+        directory.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=directory):
+            pass
+    except OSError as exc:
+        raise ProblemError(option, "", f"cannot write {what} into {str(directory)!r}: "
+                                       f"{exc.strerror or exc}") from None
+
+
+def check_outputs(args) -> None:
+    """Before any work: --out DIR and the directory of --plot FILE must be writable (created if missing)."""
+    out = getattr(args, "out", None)
+    if out is not None:
+        from ..io.design_file import check_out_dir
+
+        _probe_dir(check_out_dir(out), "--out", "design.json")
+    plot = getattr(args, "plot", None)
+    if plot is not None and plot.lower() != "none":
+        if Path(plot).is_dir():
+            raise ProblemError("--plot", "", f"{plot!r} is a directory: give a figure file name such as "
+                                             f"{str(Path(plot) / 'figure.png')!r}")
+        _probe_dir(Path(plot).absolute().parent, "--plot", "the figure")
 
 
 def _write_figure(figure_fn, path: Path | None, args) -> None:
@@ -155,8 +204,11 @@ def _write_figure(figure_fn, path: Path | None, args) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    figure_fn(path)
+    _probe_dir(path.absolute().parent, "--plot" if args.plot else "figure directory", "the figure")
+    try:
+        figure_fn(path)
+    except OSError as exc:
+        raise ProblemError("--plot", "", f"cannot write the figure {str(path)!r}: {exc.strerror or exc}") from None
     print(f"figure written to {path}", file=sys.stderr if args.json else sys.stdout)
 
 

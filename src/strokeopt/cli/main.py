@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 from ..errors import ProblemError, SolverError, StrokeoptError
-from .common import logs_to_stderr
+from .common import check_outputs, logs_to_stderr
 from .parser import build_parser
 
 
@@ -36,6 +36,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         _check_plot_format(args)
+        check_outputs(args)  # an unwritable --out or --plot fails now, not after the work
         if getattr(args, "json", False) and getattr(args, "verbose", False):
             with logs_to_stderr():
                 return args.run(args)

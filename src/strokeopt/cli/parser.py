@@ -47,9 +47,10 @@ def _stroke_options(p: argparse.ArgumentParser, sweep: bool = False, law: bool =
         p.add_argument("--chi", type=float, help="shape parameter chi of the modified sine law (0 < chi <= 0.25)")
 
 
-def _plot_option(p: argparse.ArgumentParser, name: str | None) -> None:
-    where = f"default {DEFAULT_OUT}/<problem>_{name}.png; " if name else ""
-    p.add_argument("--plot", metavar="FILE", help=f"figure file ({where}'none' for no figure)")
+def _plot_option(p: argparse.ArgumentParser, name: str) -> None:
+    p.add_argument("--plot", metavar="FILE",
+                   help=f"figure file (default {DEFAULT_OUT}/<problem>_{name}.png, named by what distinguishes the "
+                        "run; none with --json unless --plot asks; 'none' for no figure)")
 
 
 def _simulation_arguments(p) -> None:
@@ -94,7 +95,7 @@ def build_parser() -> argparse.ArgumentParser:
                        epilog="Example: strokeopt kinematics problems/deco2000_needle_bar.toml --spm 600 --law poly5")
     _stroke_options(p)
     _drive_options(p, "the design's optimal stroke replaces the problem's law")
-    _plot_option(p, "kinematics")
+    _plot_option(p, "kinematics_<spm>spm_<law>")
     p.set_defaults(run=cmd_kinematics)
 
     p = sub.add_parser("size", parents=[problem], help="rank motors and pulleys: torque, RMS, speed, inertia, belt checks",
@@ -116,7 +117,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--continuous-radius", action="store_true",
                    help="also the pulley radius minimising each motor's peak torque (not rounded to teeth)")
     p.add_argument("--explain", action="store_true", help="torque breakdown at the peak and every check's margin")
-    _plot_option(p, "sizing")
+    _plot_option(p, "size_<spm>spm_<law>_<motor>_z<teeth>")
     p.set_defaults(run=cmd_size)
 
     p = sub.add_parser("solve", parents=[problem], help="optimal stroke, pulley and motor by direct collocation",
@@ -138,11 +139,11 @@ def build_parser() -> argparse.ArgumentParser:
     _drive_options(p, "the solve re-solves the stroke at that rate on that drive. --motor/--pulley-teeth fix the "
                       "motor/pulley (the same as --set design.motor_choice='\"fixed\"' / design.pulley='\"fixed\"')")
     _verbose_option(p, "IPOPT's (and Bonmin's) output of the solve")
-    p.add_argument("--out", metavar="DIR", help="write design.json, cam_table.csv (0.1 deg) and stroke.png into DIR")
+    p.add_argument("--out", metavar="DIR", help="write design.json and cam_table.csv (0.1 deg) into DIR, and the "
+                                                "figure too unless --plot or --json says otherwise")
     p.add_argument("--study", choices=("mesh",), help="'mesh': objective error, violation between nodes and time "
                                                       "over mesh sizes and collocation degrees")
-    p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_solve.png; "
-                                                  "'none' for no figure)")
+    _plot_option(p, "solve_<spm>spm_<objective>")
     p.set_defaults(run=cmd_solve)
 
     p = sub.add_parser("bench", help="speed benchmarks, each against a reference measured in the same run",
@@ -173,8 +174,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--study", choices=("tolerance",),
                    help="'tolerance': error of impact velocity and release angle against a tight reference vs CPU "
                         "time, over tolerances and smoothing widths")
-    p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_simulate_<scene>.png; "
-                                                  "'none' for no figure)")
+    _plot_option(p, "simulate_<scene>_<spm>spm_<law>")
     p.set_defaults(run=cmd_simulate)
 
     p = sub.add_parser("verify", help="simulate a scene with the stroke of a design.json (written by the design solve)",
@@ -197,8 +197,7 @@ def build_parser() -> argparse.ArgumentParser:
     _drive_options(p, "its optimal stroke is simulated")
     _verbose_option(p, "the integrator's statistics")
     _simulation_arguments(p)
-    p.add_argument("--plot", metavar="FILE", help=f"figure file (default {DEFAULT_OUT}/<problem>_verify_<scene>.png; "
-                                                  "'none' for no figure)")
+    _plot_option(p, "verify_<scene>_<spm>spm_<objective>")
     p.set_defaults(run=cmd_verify)
 
     p = sub.add_parser("accuracy", parents=[problem], help="handover accuracy: servo loop, belt stretch, encoder",
@@ -216,7 +215,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--compare-laws", action="store_true",
                    help="also report handover error and residual vibration of every classic law")
     _drive_options(p, "the prediction is for its optimal stroke, and the classic laws follow as a table")
-    _plot_option(p, "accuracy")
+    _plot_option(p, "accuracy_<spm>spm_<law>_<motor>")
     p.set_defaults(run=cmd_accuracy)
 
     p = sub.add_parser("tradeoff", parents=[problem], help="what accuracy costs: highest stitch rate per handover accuracy",
@@ -233,6 +232,6 @@ def build_parser() -> argparse.ArgumentParser:
                    help="which strokes to compare (default both)")
     p.add_argument("--resolution", type=float, default=10.0, help="stitch-rate resolution of the search [spm] (default 10)")
     _drive_options(p, "(its motor and pulley only: the stroke is solved again at every rate)")
-    _plot_option(p, "tradeoff")
+    _plot_option(p, "tradeoff_<strokes>_<law>_<motor>")
     p.set_defaults(run=cmd_tradeoff)
     return parser

@@ -9,8 +9,8 @@ needle-handover results of sources A.6:
 * lag = x_driven - x_follower > 1 um, starting before the impact (after it the stop holds the
   follower back); it lasts until the first time after its onset that x_follower' catches up
   with x_driven';
-* remaining gap N = N - (x3 - x2), its minimum before the impact (on the output grid);
-  premature release = gap N closed (remaining gap < 1 um) before the impact, or the needle
+* remaining gap N = N - (x3 - x2), its minimum before the impact (on the output grid, and between
+  the output points either side of the grid's minimum on the finer grid of ``refine``); premature release = gap N closed (remaining gap < 1 um) before the impact, or the needle
   released before the impact (the gap then closed between output points);
 * release: the first time the grip's condition ends (x1 - x3 > M).
 
@@ -83,7 +83,7 @@ METRICS: tuple[Metric, ...] = (
     Metric("lag_end_angle_deg", "follower", "cam angle where the follower's velocity catches up with the driven body's"),
     Metric("max_lag_mm", "follower", "largest x_driven - x_follower before the impact (0 if never positive)"),
     Metric("gap_N_mm", "gap", "the gap of the gap contact in the model"),
-    Metric("min_gap_N_mm", "gap", "smallest remaining gap before the impact (on the output grid)"),
+    Metric("min_gap_N_mm", "gap", "smallest remaining gap before the impact (output grid, refined around its minimum)"),
     Metric("release_angle_deg", "release", "cam angle where the release grip's condition ends"),
     Metric("premature_release", "gap", "gap closed (or grip released) before the impact; None without an impact"),
     Metric("peak_pad_force_N", "impact", "peak force of the impact contact (on the output grid)"),
@@ -144,6 +144,19 @@ def _event(S, y, dy, refine=None, start: float = -math.inf):
     return t_hit, S, i
 
 
+def _refined_min(refine, i, n, t_end, y) -> float:
+    """Smallest ``y`` on the finely re-integrated output intervals either side of output point ``i``
+    (up to time ``t_end``); inf where nothing can be refined."""
+    low = math.inf
+    for k in (i - 1, i):
+        local = refine(k) if 0 <= k < n - 1 else None
+        if local is not None:
+            values = y(local) if t_end is None else y(local)[local.t <= t_end]
+            if values.size:
+                low = min(low, float(np.min(values)))
+    return low
+
+
 # --------------------------------------------------------------------------- metrics
 
 
@@ -199,8 +212,12 @@ def scene_metrics(r, sc, refine=None) -> dict:
         m["gap_N_mm"] = el.gap * 1e3
         r.remaining_gap = remaining
         before = remaining if t_imp is None else remaining[t <= t_imp]
-        m["min_gap_N_mm"] = float(np.min(before)) * 1e3
-        closed_before_impact = bool(np.min(before) < GAP_CLOSED)
+        smallest = float(np.min(before))
+        if refine is not None:  # the gap closes for microseconds: look between the output points around it
+            smallest = min(smallest, _refined_min(refine, int(np.argmin(before)), len(t), t_imp,
+                                                  lambda S: -(px(S, ba) - px(S, bb) + el.offset)))
+        m["min_gap_N_mm"] = smallest * 1e3
+        closed_before_impact = smallest < GAP_CLOSED
     if roles.release:
         el = els[roles.release]
         p, q, off = el.acts_while

@@ -149,6 +149,17 @@ class SceneResult:
     stats: dict = field(default_factory=dict)
     remaining_gap: np.ndarray | None = None  # m, of the model's gap contact (gap N), if in the scene
     stroke_label: str = ""
+    # the model's coordinates in the problem's: problem position = frame_origin + frame_sign * model position
+    frame_sign: float = 1.0
+    frame_origin: float = 0.0  # m
+
+    def problem_position(self, body: str) -> np.ndarray:
+        """A body's position in the problem's coordinates (the stroke's: the file's positions) [m]."""
+        return self.frame_origin + self.frame_sign * self.positions[body]
+
+    def problem_velocity(self, body: str) -> np.ndarray:
+        """A body's velocity in the problem's coordinates [m/s]."""
+        return self.frame_sign * self.velocities[body]
 
     @property
     def angle_deg(self) -> np.ndarray:
@@ -284,7 +295,9 @@ def integrate_scene(problem, scene: str, spm: float | None, stroke, options: Sim
     grid = np.linspace(0.0, 1.0, n_out + 1)
     # only the driven body: nothing to integrate
     stepper = make_stepper(ode, grid, opts, scene, spm) if ode.state_size else None
-    return _run(sc, scene, spm, stroke, period, ode, grid, stepper, opts, cpu0)
+    result = _run(sc, scene, spm, stroke, period, ode, grid, stepper, opts, cpu0)
+    result.frame_sign, result.frame_origin = sign, s_ref
+    return result
 
 
 @dataclass

@@ -11,12 +11,15 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
-from ..contact.events import LAG_THRESHOLD
+from ..contact.events import GAP_CLOSED, LAG_THRESHOLD
 from ..contact.studies import lag_onset_spm
+from .figures import frame_label
 from .format import drive_text
 
-SWEEP_COLUMNS = [("spm", "spm"), ("impact_velocity_m_s", "impact m/s"), ("impact_angle_deg", "impact deg"),
-                 ("lag", "lag"), ("lag_end_angle_deg", "lag end deg"), ("min_gap_N_mm", "min gap N mm"),
+# speeds are magnitudes (toward the handover); the gap is closed below GAP_CLOSED, the threshold 'premature' uses
+SWEEP_COLUMNS = [("spm", "spm"), ("impact_velocity_m_s", "impact speed m/s"), ("impact_angle_deg", "impact deg"),
+                 ("lag", "lag"), ("lag_end_angle_deg", "lag end deg"),
+                 ("min_gap_N_mm", f"min gap N mm (closed < {GAP_CLOSED * 1e3:g})"),
                  ("release_angle_deg", "release deg"), ("premature_release", "premature"),
                  ("peak_pad_force_N", "pad N"), ("cpu_time_s", "CPU s")]
 
@@ -47,9 +50,12 @@ def scene_text(problem, scene: str, summary: dict) -> str:
     elif s["max_lag_mm"] is not None:
         lines.append(f"{f} follows the {sc.driven} (no lag above {LAG_THRESHOLD * 1e6:g} um)")
     if s["min_gap_N_mm"] is not None:
-        lines.append(f"smallest remaining gap N before the impact: {s['min_gap_N_mm']:.2f} mm")
+        lines.append(f"smallest remaining gap N before the impact: {s['min_gap_N_mm']:.4f} mm "
+                     f"(closed below {GAP_CLOSED * 1e3:g} mm)")
     if s["release_angle_deg"] is not None:
-        verdict = {True: "PREMATURE: gap N closed before the impact", False: "after the impact, not premature",
+        closed = s["min_gap_N_mm"] is not None and s["min_gap_N_mm"] < GAP_CLOSED * 1e3
+        verdict = {True: "PREMATURE: " + ("gap N closed before the impact" if closed else "released before the impact"),
+                   False: "after the impact, not premature",
                    None: "no impact to compare with"}[s["premature_release"]]
         lines.append(f"needle released at {s['release_angle_deg']:.2f} deg ({verdict})")
     if s["peak_pad_force_N"] is not None:
@@ -76,13 +82,14 @@ def plot_scene(r, path=None):
     fig, axes = plt.subplots(3, 1, sharex=True, figsize=(9, 8), constrained_layout=True)
     ax = axes[0]
     for b in r.velocities:
-        ax.plot(ang, r.velocities[b], lw=1.2 if b == r.driven else 1.0, label=b + (" (driven)" if b == r.driven else ""))
-    ax.set_ylabel("velocity [m/s]")
+        ax.plot(ang, r.problem_velocity(b), lw=1.2 if b == r.driven else 1.0,
+                label=b + (" (driven)" if b == r.driven else ""))
+    ax.set_ylabel(frame_label("velocity", "m/s"))
     ax.legend(fontsize=8, loc="best")
     ax = axes[1]
     for b in r.positions:
-        ax.plot(ang, r.positions[b] * 1e3, lw=1.0, label=b)
-    ax.set_ylabel("position [mm]\n(toward handover)")
+        ax.plot(ang, r.problem_position(b) * 1e3, lw=1.0, label=b)
+    ax.set_ylabel(frame_label("position", "mm"))
     ax = axes[2]
     if r.remaining_gap is not None:
         ax.plot(ang, r.remaining_gap * 1e3, color="tab:purple", label=f"remaining gap N (N = {m['gap_N_mm']:g} mm)")
@@ -102,9 +109,9 @@ def plot_scene(r, path=None):
     axes[2].legend(fontsize=8, loc="best")
     lo = m.get("lag_onset_angle_deg") or 0.0
     axes[-1].set_xlim(max(0.0, min(lo, 20.0) - 5), 90.0)
-    axes[-1].set_xlabel("cam angle [deg]")
+    axes[-1].set_xlabel("cam angle [deg] (360 deg = one cam cycle)")
     iv = m.get("impact_velocity_m_s")
-    axes[0].set_title(f"scene {r.scene} at {r.spm:g} spm: impact "
+    axes[0].set_title(f"scene {r.scene}, {r.stroke_label or 'stroke'} at {r.spm:g} spm: impact "
                       + (f"{iv:.2f} m/s" if iv is not None else "none"))
     if path is not None:
         fig.savefig(path, dpi=120)
@@ -117,10 +124,12 @@ def plot_sweep(rows: list[dict], path=None):
     spm = [r["spm"] for r in rows]
     fig, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 6), constrained_layout=True)
     axes[0].plot(spm, [np.nan if r["impact_velocity_m_s"] is None else r["impact_velocity_m_s"] for r in rows], "o-", ms=3)
-    axes[0].set_ylabel("impact velocity [m/s]")
+    axes[0].set_ylabel("impact speed [m/s]\n(toward the handover)")
     axes[1].plot(spm, [np.nan if r["min_gap_N_mm"] is None else r["min_gap_N_mm"] for r in rows], "o-", ms=3,
                  color="tab:purple")
     axes[1].set_ylabel("min remaining gap N [mm]")
+    axes[1].axhline(GAP_CLOSED * 1e3, color="tab:red", ls=":", lw=1, label=f"closed below {GAP_CLOSED * 1e3:g} mm")
+    axes[1].legend(fontsize=8, loc="best")
     onset = lag_onset_spm(rows)
     for ax in axes:
         ax.grid(True, alpha=0.3)
@@ -128,8 +137,9 @@ def plot_sweep(rows: list[dict], path=None):
             ax.axvline(onset, color="tab:orange", ls="--", lw=1, label=f"follower lags from {onset:g} spm")
     if onset is not None:
         axes[0].legend(fontsize=8, loc="best")  # named in a legend placed clear of the curve
-    axes[1].set_xlabel("speed [spm]")
-    axes[0].set_title(f"scene {rows[0]['scene']}: speed sweep" if rows else "speed sweep")
+    axes[1].set_xlabel("stitch rate [spm]")
+    axes[0].set_title(f"scene {rows[0]['scene']}, {rows[0].get('stroke') or 'stroke'}: speed sweep" if rows
+                      else "speed sweep")
     if path is not None:
         fig.savefig(path, dpi=120)
         plt.close(fig)

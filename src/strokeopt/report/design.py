@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 from ..drive.checks import torque_limit_text
-from .format import format_table, format_value
+from .format import format_table, format_value, period_text
 from ..design.result import Design, move_direction
 from ..design.settings import DesignSettings
 
@@ -37,7 +37,41 @@ def plot_mesh_study(rows: list[dict], path=None):
     return fig
 
 
-def plot_design_sweep(rows: list[dict], path=None):
+def plot_design(design: Design, law_stroke=None, path=None):
+    """The optimal stroke (and the problem's classic law for comparison) over the cam angle, and,
+    with a drive, the design's torque-speed path over the cycle with its peak and RMS operating
+    points over its motor's peak, rated and drive-limit curves."""
+    import matplotlib.pyplot as plt
+    from ..design.compare import design_torque
+    from .drive import draw_torque_speed
+    from .motion import draw_kinematics
+
+    path_torque = design_torque(design)
+    fig = plt.figure(figsize=(15 if path_torque else 9, 9), constrained_layout=True)
+    grid = fig.add_gridspec(4, 2 if path_torque else 1, width_ratios=[1.25, 1] if path_torque else None)
+    axes = [fig.add_subplot(grid[0, 0])]
+    axes += [fig.add_subplot(grid[i, 0], sharex=axes[0]) for i in range(1, 4)]
+    for ax in axes[:-1]:
+        ax.tick_params(labelbottom=False)
+    strokes = [design.stroke] + ([law_stroke] if law_stroke is not None else [])
+    draw_kinematics(axes, design.problem, strokes, design.spm)
+    axes[0].set_title(f"{' vs '.join(s.label for s in strokes)}; {period_text(design.stroke.period, design.spm)}",
+                      fontsize=9)
+    pulley = f"{design.pulley_teeth} teeth" if design.pulley_teeth else "continuous pulley radius"
+    what = f"{design.objective}" + (f", motor {design.motor}, {pulley}" if design.motor else "")
+    fig.suptitle(f"{design.problem.name}: optimal stroke ({what}) at {design.spm:g} spm", fontsize=11)
+    if path_torque:
+        t, terms = path_torque
+        limits = design.problem.drive.limits
+        draw_torque_speed(fig.add_subplot(grid[:, 1]), design.motor_spec, terms.omega, terms.total, t,
+                          limits, "torque-speed path of the optimal stroke over the cycle")
+    if path is not None:
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+    return fig
+
+
+def plot_design_sweep(rows: list[dict], path=None, objective: str | None = None):
     """Optimal objective (and peak torque) over the stitch rate of a design sweep; infeasible rates marked."""
     import matplotlib.pyplot as plt
 
@@ -50,11 +84,13 @@ def plot_design_sweep(rows: list[dict], path=None):
             ax.plot([r["spm"] for r in ok], [r["peak_torque_N_m"] for r in ok], "s--", label="peak torque [N m]")
     for r in bad:
         ax.axvline(r["spm"], color="tab:red", alpha=0.4, lw=1)
-    ax.set_xlabel("stitches per minute")
+    ax.set_xlabel("stitch rate [spm]")
     ax.set_ylabel("objective")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
-    ax.set_title("optimal design over the stitch rate (red: infeasible)")
+    motors = ", ".join(dict.fromkeys(str(r["motor"]) for r in ok if r.get("motor"))) or "-"
+    ax.set_title(f"optimal design ({objective or 'objective'}; motor {motors}) over the stitch rate "
+                 "(red: infeasible)", fontsize=10)
     if path is not None:
         fig.savefig(path, dpi=120)
         plt.close(fig)
@@ -73,17 +109,18 @@ def _pulley_text(design: Design) -> str:
 
 def design_text(design: Design, comparison: list[dict] | None = None) -> str:
     """A readable account of a design: choices, objective, moves, checks with margins, active constraints."""
-    lines = [f"{design.problem.name}: optimal stroke at {design.spm:g} spm ({design.status}, "
-             f"{design.solve_time_s:.2f} s, mesh {design.mesh.intervals} x degree {design.mesh.degree})",
+    lines = [f"{design.problem.name}: optimal stroke at {design.spm:g} spm "
+             f"({period_text(design.stroke.period, design.spm)}; {design.status}, "
+             f"solved in {design.solve_time_s:.2f} s, mesh {design.mesh.intervals} x degree {design.mesh.degree})",
              f"objective {design.objective}: {format_value(design.objective_value)} {design.objective_unit}"]
     if design.motor is not None:
         lines.append(f"motor {design.motor}; pulley {_pulley_text(design)}, pitch diameter "
                      f"{design.pitch_diameter * 1e3:.2f} mm")
     lines.append("")
-    lines.append(format_table([m.to_dict() for m in design.moves],
+    lines.append(format_table([{**m.to_dict(), "duration_ms": m.duration * 1e3} for m in design.moves],
                               [("index", "move"), ("name", "interval"), ("stroke_mm", "stroke mm"),
                                ("direction", "direction"),
-                               ("duration_s", "time s"), ("v_max_m_s", "v_max m/s"), ("a_max_m_s2", "a_max m/s2"),
+                               ("duration_ms", "move time ms"), ("v_max_m_s", "v_max m/s"), ("a_max_m_s2", "a_max m/s2"),
                                ("jerk_max_m_s3", "jerk_max m/s3"), ("C_a", "C_a")]))
     if design.checks:
         lines.append("")

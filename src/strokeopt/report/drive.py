@@ -11,8 +11,8 @@ import math
 import matplotlib.pyplot as plt
 import numpy as np
 
-from ..drive.checks import torque_limit
-from .format import format_table
+from ..drive.checks import cycle_values, torque_limit
+from .format import format_table, period_text
 
 
 def sizing_verdict(sizing) -> str:
@@ -49,7 +49,7 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
                        f"beyond {f['contact_position_mm']:g} mm, pushing {f['direction']})"
                        for f in inp["load_forces"]) or "none"
     lines = [
-        f"{report['problem']} at {report['spm']:g} spm (cycle {report['cycle_time_s'] * 1e3:.1f} ms, "
+        f"{report['problem']} at {report['spm']:g} spm ({period_text(report['cycle_time_s'], report['spm'])}, "
         f"{inp['law']}, {inp['samples']} samples over the whole cycle)",
         f"load: moving mass {inp['moving_mass_kg']:g} kg, gravity {inp['gravity_m_s2']:g} m/s^2 along the "
         f"axis, load forces: {forces}",
@@ -96,6 +96,39 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
     return "\n".join(lines).rstrip()
 
 
+def draw_torque_speed(ax, motor, omega, torque, t, limits, title: str) -> None:
+    """The cycle's torque-speed path (``omega`` [rad/s], ``torque`` [N m] over times ``t``) with its
+    peak and RMS operating points, over the motor's peak and rated (continuous) curves and the
+    torque limit every check uses (:func:`~strokeopt.drive.checks.torque_limit` of ``limits``)."""
+    rpm = 60 / (2 * math.pi)
+    m = motor
+    w = np.linspace(-m.rated_speed, m.rated_speed, 101)
+    drive_peak = torque_limit(m, limits)
+    for sign in (1, -1):
+        ax.plot(w * rpm, sign * m.continuous_torque(w), color="tab:green",
+                label="motor rated (continuous)" if sign > 0 else None)
+        ax.plot(w * rpm, sign * m.peak_envelope(w), color="tab:red", label="motor peak" if sign > 0 else None)
+        ax.plot(w * rpm, sign * np.full_like(w, drive_peak), color="tab:red", ls=":",
+                label=f"torque limit {drive_peak:.2f} N m (min of peak, {limits.peak_limit_pct:g} % rated)"
+                if sign > 0 else None)
+    for x in (-m.rated_speed * rpm, m.rated_speed * rpm):
+        ax.axvline(x, color="0.5", lw=0.8, ls="--")
+    omega, torque, t = np.asarray(omega, float), np.asarray(torque, float), np.asarray(t, float)
+    ax.plot(omega * rpm, torque, color="tab:blue", lw=1.2, label="cycle")
+    i = int(np.argmax(np.abs(torque)))
+    ax.plot(omega[i] * rpm, torque[i], "o", color="tab:blue", ms=7,
+            label=f"peak {abs(torque[i]):.3f} N m at {abs(omega[i]) * rpm:.0f} rpm")
+    # the RMS torque of the sizing check; the RMS speed by the same rule
+    (_, rms_torque), (_, rms_speed) = (cycle_values(y, omega, omega, t)[:2] for y in (torque, omega))
+    ax.plot(rms_speed * rpm, rms_torque, "D", color="tab:purple", ms=7,
+            label=f"RMS {rms_torque:.3f} N m at {rms_speed * rpm:.0f} rpm (RMS speed)")
+    ax.set_xlabel("motor speed [rpm]")
+    ax.set_ylabel("motor torque [N m]")
+    ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, loc="best")
+
+
 def plot_sizing(sizing, candidate=None, path=None):
     """The classic sizing picture for ``candidate`` (default: the best ranked):
     the cycle's torque-speed trajectory over the motor's continuous and peak
@@ -103,27 +136,10 @@ def plot_sizing(sizing, candidate=None, path=None):
     ``sizing`` is a :class:`~strokeopt.drive.sizing.Sizing`."""
     c = candidate or sizing.candidates[0]
     terms = sizing.torque_curve(c)
-    rpm = 60 / (2 * math.pi)
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.8), constrained_layout=True)
     m = c.motor
-    w = np.linspace(-m.rated_speed, m.rated_speed, 101)
-    drive_peak = torque_limit(m, sizing.limits)
-    for sign in (1, -1):
-        ax1.plot(w * rpm, sign * m.continuous_torque(w), color="tab:green",
-                 label="continuous (thermal)" if sign > 0 else None)
-        ax1.plot(w * rpm, sign * m.peak_envelope(w), color="tab:red", label="motor peak" if sign > 0 else None)
-        ax1.plot(w * rpm, sign * np.full_like(w, drive_peak), color="tab:red", ls=":",
-                 label=f"drive limit ({sizing.limits.peak_limit_pct:g} % rated)" if sign > 0 else None)
-    for x in (-m.rated_speed * rpm, m.rated_speed * rpm):
-        ax1.axvline(x, color="0.5", lw=0.8, ls="--")
-    ax1.plot(terms.omega * rpm, terms.total, color="tab:blue", lw=1.2, label="cycle")
-    rms = c.check("rms_torque").value
-    ax1.axhline(rms, color="tab:blue", ls="--", lw=0.8, label=f"RMS {rms:.2f} N m")
-    ax1.set_xlabel("motor speed [rpm]")
-    ax1.set_ylabel("motor torque [N m]")
-    ax1.set_title(f"{m.name}, pulley z{c.pulley.teeth}, {sizing.spm:g} spm")
-    ax1.grid(True, alpha=0.3)
-    ax1.legend(fontsize=8, loc="best")
+    draw_torque_speed(ax1, m, terms.omega, terms.total, sizing.kinematics.t, sizing.limits,
+                      f"{m.name}, pulley z{c.pulley.teeth}, {sizing.spm:g} spm, {sizing.inputs['law']}")
     angle = 360.0 * sizing.kinematics.t / sizing.period
     ax2.plot(angle, terms.total, color="k", lw=1.5, label="total")
     for name, val in terms.as_dict().items():

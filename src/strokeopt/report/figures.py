@@ -1,6 +1,21 @@
-"""What every figure shares: dwell bands on a cam-angle axis."""
+"""What every figure shares: the coordinates its axes are in, and dwell bands on a cam-angle axis.
+
+Every figure and table gives positions and velocities in the problem's coordinates: the problem
+file's positions (``timing.start_position_mm`` and the moves' strokes; + is a move with
+``direction = "up"``; 0 is the handover point of the reference problem). The contact model computes
+in its own coordinates (from the start of the handover move, + toward the handover); its results
+are turned into the problem's before they are drawn (:meth:`~strokeopt.contact.simulate.SceneResult.problem_position`).
+"""
 
 from __future__ import annotations
+
+#: the axis-label suffix naming the problem's coordinates
+PROBLEM_FRAME = "problem frame, + up"
+
+
+def frame_label(quantity: str, unit: str) -> str:
+    """An axis label of a position or velocity in the problem's coordinates: 'position [mm]\\n(problem frame, + up)'."""
+    return f"{quantity} [{unit}]\n({PROBLEM_FRAME})"
 
 
 def shade_dwells(ax, timing, spm) -> None:

@@ -9,8 +9,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from ..motion.stroke import StrokeFunction
-from .figures import shade_dwells
-from .format import format_table
+from .figures import frame_label, shade_dwells
+from .format import format_table, period_text
 
 
 def kinematics_summary(problem, stroke: StrokeFunction, spm: float) -> dict:
@@ -46,7 +46,8 @@ def kinematics_summary(problem, stroke: StrokeFunction, spm: float) -> dict:
     return {
         "problem": problem.name,
         "spm": spm,
-        "cycle_time_s": sch.period,
+        "cycle_time_s": sch.period,  # the cam cycle: 1 / cam_revolutions_per_stitch stitches
+        "stitch_period_s": 60.0 / spm,
         "interval_times": problem.timing.interval_times,
         "law": problem.default_law.name if len({m.law for m in problem.timing.moves}) == 1 else "mixed",
         "law_params": problem.default_law.params,
@@ -59,19 +60,20 @@ def kinematics_summary(problem, stroke: StrokeFunction, spm: float) -> dict:
 
 KINEMATICS_COLUMNS = [
     ("index", "#"), ("name", "interval"), ("stroke_mm", "stroke mm"), ("span_deg", "span deg"),
-    ("time_s", "time s"), ("v_max_m_s", "v_max m/s"), ("a_max_m_s2", "a_max m/s2"),
+    ("time_ms", "interval time ms"), ("v_max_m_s", "v_max m/s"), ("a_max_m_s2", "a_max m/s2"),
     ("jerk_max_m_s3", "jerk_max m/s3"), ("pulley_speed_max_deg_s", "pulley w deg/s"),
     ("pulley_speed_max_rpm", "pulley rpm"), ("pulley_accel_max_deg_s2", "pulley eps deg/s2"),
 ]
 
 
 def kinematics_text(summary: dict) -> str:
-    head = (f"{summary['problem']} at {summary['spm']:g} spm (cycle {summary['cycle_time_s'] * 1e3:.1f} ms, "
+    head = (f"{summary['problem']} at {summary['spm']:g} spm ({period_text(summary['cycle_time_s'], summary['spm'])}, "
             f"interval times {summary['interval_times']}), pulley {summary['pulley_teeth']} teeth, "
             f"PD {summary['pulley_pitch_diameter_mm']:.2f} mm")
     laws = sorted({m["law"] for m in summary["moves"]})
     head += "\nmotion law: " + ", ".join(laws)
-    return head + "\n\n" + format_table(summary["intervals"], KINEMATICS_COLUMNS)
+    rows = [{**r, "time_ms": r["time_s"] * 1e3} for r in summary["intervals"]]
+    return head + "\n\n" + format_table(rows, KINEMATICS_COLUMNS)
 
 
 def plot_kinematics(problem, strokes, spm: float, path: str | Path | None = None, n: int = 3601):
@@ -80,9 +82,23 @@ def plot_kinematics(problem, strokes, spm: float, path: str | Path | None = None
     ``strokes`` is a StrokeFunction or a list of them. Dwells are shaded, the
     handover point is marked. Returns the figure; writes it when ``path`` is given.
     """
+    fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 9), constrained_layout=True)
+    draw_kinematics(list(axes), problem, strokes, spm, n)
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig
+
+
+def stroke_names(strokes) -> str:
+    """The labels of the strokes of a figure ('modified_sine (chi = 0.095)', 'optimal vs ...')."""
+    return " vs ".join(dict.fromkeys(s.label for s in strokes if s.label))
+
+
+def draw_kinematics(axes, problem, strokes, spm: float, n: int = 3601) -> None:
+    """:func:`plot_kinematics` on four given axes (position, velocity, acceleration, jerk; shared x)."""
     if not isinstance(strokes, (list, tuple)):
         strokes = [strokes]
-    fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 9), constrained_layout=True)
     j_peak = max(float(np.max(np.abs(s.sample(n).j))) for s in strokes)
     jerk_unit = ("km/s$^3$", 1e-3) if j_peak >= 1e4 else ("m/s$^3$", 1.0)
     units = [("position", "mm", 1e3), ("velocity", "m/s", 1.0), ("acceleration", "m/s$^2$", 1.0),
@@ -94,7 +110,7 @@ def plot_kinematics(problem, strokes, spm: float, path: str | Path | None = None
             ax.plot(angle, y * scale, lw=1.4, label=stroke.label)
     for ax, (name, unit, _) in zip(axes, units):
         shade_dwells(ax, problem.timing, spm)
-        ax.set_ylabel(f"{name} [{unit}]")
+        ax.set_ylabel(frame_label(f"bar {name}", unit))
         ax.grid(True, alpha=0.3)
         ax.axhline(0, color="0.5", lw=0.6)
     move = problem.timing.handover_move
@@ -105,14 +121,11 @@ def plot_kinematics(problem, strokes, spm: float, path: str | Path | None = None
             ax.axvline(a_end, color="tab:red", ls="--", lw=1)
         axes[0].annotate(f"handover ({move.end_position * 1e3:g} mm)", (a_end, move.end_position * 1e3),
                          xytext=(8, 12), textcoords="offset points", color="tab:red")
-    axes[-1].set_xlabel("cam angle [deg]")
+    axes[-1].set_xlabel("cam angle [deg] (360 deg = one cam cycle)")
     axes[-1].set_xlim(0, 360)
     axes[-1].set_xticks(np.arange(0, 361, 30))
     has_dwell = any(not i.is_move for i in problem.timing.intervals)
-    axes[0].set_title(f"{problem.name}: stroke at {spm:g} spm" + (" (dwells shaded)" if has_dwell else ""))
+    axes[0].set_title(f"{problem.name}: {stroke_names(strokes)} at {spm:g} spm ({period_text(problem.timing.period(spm), spm)})"
+                      + (", dwells shaded" if has_dwell else ""), fontsize=10)
     if len(strokes) > 1:
         axes[0].legend(loc="best", fontsize=8)
-    if path is not None:
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
-    return fig

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..servo.accuracy import AccuracyResult
+from .figures import frame_label
 from .format import drive_text, format_table, format_value
 
 
@@ -80,8 +81,8 @@ def accuracy_text(report: dict) -> str:
     return "\n".join(lines)
 
 
-def plot_accuracy(result: AccuracyResult, path: str | Path | None = None):
-    """Commanded vs. actual bar position, and the error and its parts over the cam angle."""
+def plot_accuracy(result: AccuracyResult, path: str | Path | None = None, motor: str | None = None):
+    """Commanded vs. actual bar position (problem frame), and the error and its parts over the cam angle."""
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(2, 1, sharex=True, figsize=(9, 7), constrained_layout=True)
@@ -89,13 +90,13 @@ def plot_accuracy(result: AccuracyResult, path: str | Path | None = None):
     ax = axes[0]
     ax.plot(ang, result.s_cmd * 1e3, lw=1.4, label="commanded")
     ax.plot(ang, result.x * 1e3, lw=1.0, ls="--", label="actual (bar)")
-    ax.set_ylabel("bar position [mm]")
+    ax.set_ylabel(frame_label("bar position", "mm"))
     ax.legend(loc="best", fontsize=8)
     ax = axes[1]
     ax.plot(ang, result.error * 1e3, lw=1.4, color="k", label="bar error (commanded - actual)")
     ax.plot(ang, result.servo * 1e3, lw=1.0, label="servo tracking")
     ax.plot(ang, result.belt * 1e3, lw=1.0, label="belt stretch")
-    ax.set_ylabel("error [mm]")
+    ax.set_ylabel("error [mm]\n(commanded - actual)")
     ax.legend(loc="best", fontsize=8)
     h_ang = 360.0 * (result.handover_time - result.loop.settings.sum_small_time_constants) / result.period
     for a in axes:
@@ -104,10 +105,11 @@ def plot_accuracy(result: AccuracyResult, path: str | Path | None = None):
         a.grid(True, alpha=0.3)
     axes[1].annotate(f"handover: {result.handover_error * 1e3:.3f} mm", (h_ang, result.at_handover(result.error) * 1e3),
                      xytext=(10, 10), textcoords="offset points", color="tab:red")
-    axes[1].set_xlabel("cam angle [deg]")
+    axes[1].set_xlabel("cam angle [deg] (360 deg = one cam cycle)")
     axes[1].set_xlim(0, 360)
     axes[1].set_xticks(np.arange(0, 361, 30))
-    axes[0].set_title(f"{result.label} at {result.spm:g} spm: handover error {result.handover_error * 1e3:.3f} mm")
+    on = f" on {motor}" if motor else ""
+    axes[0].set_title(f"{result.label}{on} at {result.spm:g} spm: handover error {result.handover_error * 1e3:.3f} mm")
     if path is not None:
         fig.savefig(path, dpi=120)
         plt.close(fig)
@@ -162,7 +164,10 @@ def plot_tradeoff(report: dict, path: str | Path | None = None):
     ax.margins(x=0.06)
     ax.set_xlabel("required handover accuracy [mm]")
     ax.set_ylabel("highest stitch rate [spm]")
-    ax.set_title(f"{report['problem']}: what accuracy costs in stitch rate")
+    drive = [f"classic law {report['law']}" if report.get("law") else "",
+             f"motor {report['motor']}, {report['pulley_teeth']}-tooth pulley" if report.get("motor") else ""]
+    ax.set_title(f"{report['problem']}: what accuracy costs in stitch rate"
+                 + (f"\n({'; '.join(d for d in drive if d)})" if any(drive) else ""), fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="best", fontsize=8)
     if path is not None:
