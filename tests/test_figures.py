@@ -64,7 +64,7 @@ def test_design_figure_has_the_torque_speed_panel(reference):
     panel = [ax for ax in fig.axes if ax.get_xlabel() == "motor speed [rpm]"]
     assert len(panel) == 1
     labels = panel[0].get_legend_handles_labels()[1]
-    for wanted in ("motor peak", "motor rated", "drive limit", "cycle", "peak 0.860 N m", "RMS"):
+    for wanted in ("motor peak", "motor rated", "torque limit 3.60 N m", "cycle", "peak 0.860 N m", "RMS"):
         assert any(label.startswith(wanted) for label in labels), (wanted, labels)
     assert design.motor in fig._suptitle.get_text() and "min_peak_torque" in fig._suptitle.get_text()
     # the path drawn is the design's: its largest |torque| is the peak of the check table
