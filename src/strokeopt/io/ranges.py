@@ -39,7 +39,7 @@ def parse_spm_range(text: str, option: str = "--spm") -> list[float]:
         raise ProblemError(option, "", f"START:STOP:STEP needs STEP > 0 and STOP >= START, got {text!r}")
     count = int((stop - start) / step + 1e-9) + 1
     if count > MAX_POINTS:
-        raise ProblemError(option, "", f"{text!r} is {count} rates, more than {MAX_POINTS}: use a larger STEP")
+        raise ProblemError(option, "", f"{text!r} is {count} stitch rates, more than {MAX_POINTS}: use a larger STEP")
     return [float(start + k * step) for k in range(count)]
 
 
