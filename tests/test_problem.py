@@ -119,7 +119,7 @@ def test_misspelt_required_key_is_named(write_problem):
      "published_time_s: 37.80 deg"),
     # a move without a span is the span's error, not a later symptom (sampling, division by zero)
     (["timing.intervals[5].span_deg=0", "timing.intervals[6].span_deg=84.9"], "timing.intervals[5].span_deg",
-     "needs a positive span"),
+     "needs a span of at least 0.1 deg"),
 ])
 def test_spans_that_would_be_ignored_or_empty(capsys, reference_path, sets, field, words):
     args = ["kinematics", str(reference_path), "--plot", "none"]
