@@ -118,10 +118,6 @@ def validate_design(data: dict, file: str) -> None:
     present, of its type, finite and in range, every ``unit_solution`` of the mesh's shape. Raises
     :class:`ProblemError` naming the file and the field (``moves[1].unit_solution.S``)."""
     top = Fields(data, file)
-    top.number("spm", min=SPM_RANGE[0], max=SPM_RANGE[1])
-    top.number("cycle_time_s", positive=True, max=3600.0)
-    if data.get("pulley_teeth") is not None:
-        top.number("pulley_teeth", integer=True, min=1, max=10**4)
     mesh = top.table("mesh")
     n = mesh.number("intervals", integer=True, min=1, max=2000)  # the ranges of [design] (design/settings.py)
     d = mesh.number("degree", integer=True, min=1, max=9)
@@ -148,6 +144,10 @@ def validate_design(data: dict, file: str) -> None:
         itv.number("position_mm", min=-1e4, max=1e4)
         if kind == "move" and k not in move_of:
             raise itv.error("kind", f"interval {k} is a move, but no entry of moves has interval = {k}")
+    top.number("spm", min=SPM_RANGE[0], max=SPM_RANGE[1])
+    top.number("cycle_time_s", positive=True, max=3600.0)
+    if data.get("pulley_teeth") is not None:
+        top.number("pulley_teeth", integer=True, min=1, max=10**4)
 
 
 def _finite_array(f: Fields, key: str, shape: tuple[int, ...]) -> None:
