@@ -33,7 +33,7 @@ published_time_s = 0.0312
         # a missing interval: the spans no longer add to 360 deg
         (lambda t: t.replace(MOVE_2, ""), "timing.intervals", "not 360"),
         (lambda t: t.replace("span_deg = 169.6", "span_deg = 170.6"), "timing.intervals", "add to 361"),
-        (lambda t: t.replace("stroke_mm = 3.0", "stroke_mm = -3.0"), "timing.intervals[5].stroke_mm", "outside the plausible range [0, 10000]"),
+        (lambda t: t.replace("stroke_mm = 3.0", "stroke_mm = -3.0"), "timing.intervals[5].stroke_mm", "outside the plausible range [0, 100000]"),
         (lambda t: t.replace('law = "modified_sine"', 'law = "trapezoidal"'), "motion.law", "not one of"),
         (lambda t: t.replace("chi = 0.095", "chi = 0.4"), "motion.chi", "out of range"),
         (lambda t: t.replace('direction = "up"', 'direction = "sideways"', 1), "timing.intervals[4].direction", "not one of"),

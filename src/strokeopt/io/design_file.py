@@ -128,7 +128,7 @@ def validate_design(data: dict, file: str) -> None:
     move_of = {}
     for m in moves:
         move_of[m.number("interval", integer=True, min=1, max=len(intervals))] = m
-        m.number("stroke_mm", min=0.0, max=1e4)
+        m.number("stroke_mm", min=0.0, max=1e5)  # the ranges of [timing] (io/problem_file.py)
         if m.has("direction"):
             m.string("direction", choices=("up", "down"))
         u = m.table("unit_solution")
@@ -141,7 +141,7 @@ def validate_design(data: dict, file: str) -> None:
         kind = itv.string("kind", choices=("move", "dwell"))
         itv.number("t_start_s", min=0.0, max=3600.0)
         itv.number("duration_s", min=0.0, max=3600.0)
-        itv.number("position_mm", min=-1e4, max=1e4)
+        itv.number("position_mm", min=-1e5, max=1e5)
         if kind == "move" and k not in move_of:
             raise itv.error("kind", f"interval {k} is a move, but no entry of moves has interval = {k}")
     top.number("spm", min=SPM_RANGE[0], max=SPM_RANGE[1])

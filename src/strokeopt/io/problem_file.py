@@ -143,9 +143,9 @@ MOVE_SPAN_MIN_DEG = 0.1
 
 def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagram:
     times = f.string("interval_times", "nominal", choices=INTERVAL_TIMES)
-    # lengths in mm: within +-10 m of the origin, strokes up to 10 m (a loom sley swings 0.1 m; the known
-    # optima use 1 m), so no position overflows a kinematic table
-    position = f.number("start_position_mm", min=-1e4, max=1e4) * 1e-3
+    # lengths in mm: within +-100 m of the origin, strokes up to 100 m (a loom sley swings 0.1 m, the known
+    # optima use 1 m, a gantry tens of metres), so no position overflows a kinematic table
+    position = f.number("start_position_mm", min=-1e5, max=1e5) * 1e-3
     rows = f.tables("intervals")
     if len(rows) < 2:
         raise f.error("intervals", f"needs at least two intervals (a move and a dwell), got {len(rows)}")
@@ -154,7 +154,7 @@ def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagra
     for row in rows:
         name = row.string("name")
         span = row.number("span_deg", min=0.0, max=360.0)
-        stroke = row.number("stroke_mm", 0.0, min=0.0, max=1e4) * 1e-3
+        stroke = row.number("stroke_mm", 0.0, min=0.0, max=1e5) * 1e-3
         # published interval times: a cycle of at most an hour (only their proportions are used)
         published = row.number("published_time_s", None, min=0.0, max=3600.0) if times == "nominal" else \
             row.number("published_time_s", positive=True, max=3600.0)
