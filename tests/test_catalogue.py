@@ -109,7 +109,7 @@ def test_motor_missing_its_inertia(tmp_path):
 
 def test_pulley_with_zero_teeth(tmp_path):
     err = _error(tmp_path, '[[pulley]]\nname = "P0"\nprofile = "GT3"\nteeth = 0\ninertia_kg_cm2 = 0.01\n')
-    assert err.field == "pulley[1].teeth" and "at least 1" in err.message
+    assert err.field == "pulley[1].teeth" and "outside the plausible range [8, 250]" in err.message
 
 
 def test_duplicate_names(tmp_path):

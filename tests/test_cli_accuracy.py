@@ -62,17 +62,17 @@ def test_help_teaches(capsys):
 @pytest.mark.parametrize("edit, field, words", [
     (lambda t: t.replace('tuning = "symmetric_optimum"', 'tuning = "manual"\nposition_gain_1_s = 0\n'
                          'speed_gain_N_m_s_rad = 0.01\nspeed_integral_time_ms = 10'),
-     "servo.position_gain_1_s", "positive"),
+     "servo.position_gain_1_s", "plausible range (0, 100000]"),
     (lambda t: t.replace('tuning = "symmetric_optimum"', 'tuning = "manual"\nposition_gain_1_s = 50\n'
                          'speed_gain_N_m_s_rad = -0.01\nspeed_integral_time_ms = 10'),
-     "servo.speed_gain_N_m_s_rad", "positive"),
+     "servo.speed_gain_N_m_s_rad", "plausible range (0, 10000]"),
     (lambda t: t.replace('tuning = "symmetric_optimum"', 'tuning = "manual"\nposition_gain_1_s = 50'),
      "servo.speed_gain_N_m_s_rad", "required"),
     (lambda t: t.replace("position_sampling_us = 250 ", "position_sampling_us = 20000 "),
      "servo.position_sampling_us", "shortest move"),
     (lambda t: t.replace("control_cycle_us = 500 ", "control_cycle_us = 15000 "),
      "servo.control_cycle_us", "shortest move"),
-    (lambda t: t.replace("belt_span_mm = 139.5 ", "belt_span_mm = 0 "), "servo.belt_span_mm", "positive"),
+    (lambda t: t.replace("belt_span_mm = 139.5 ", "belt_span_mm = 0 "), "servo.belt_span_mm", "plausible range [1, 20000]"),
     (lambda t: t.replace("belt_damping_ratio = 0.05", "belt_damping_ration = 0.05"),
      "servo.belt_damping_ration", "did you mean"),
     (lambda t: t.replace('tuning = "symmetric_optimum"', 'tuning = "symmetric_optimum"\nposition_gain_1_s = 80'),

@@ -33,11 +33,11 @@ published_time_s = 0.0312
         # a missing interval: the spans no longer add to 360 deg
         (lambda t: t.replace(MOVE_2, ""), "timing.intervals", "not 360"),
         (lambda t: t.replace("span_deg = 169.6", "span_deg = 170.6"), "timing.intervals", "add to 361"),
-        (lambda t: t.replace("stroke_mm = 3.0", "stroke_mm = -3.0"), "timing.intervals[5].stroke_mm", "at least 0"),
+        (lambda t: t.replace("stroke_mm = 3.0", "stroke_mm = -3.0"), "timing.intervals[5].stroke_mm", "outside the plausible range [0, 100000]"),
         (lambda t: t.replace('law = "modified_sine"', 'law = "trapezoidal"'), "motion.law", "not one of"),
-        (lambda t: t.replace("chi = 0.095", "chi = 0.4"), "chi", "out of range"),
+        (lambda t: t.replace("chi = 0.095", "chi = 0.4"), "motion.chi", "out of range"),
         (lambda t: t.replace('direction = "up"', 'direction = "sideways"', 1), "timing.intervals[4].direction", "not one of"),
-        (lambda t: t.replace("spm = 500", "spm = -5"), "machine.spm", "positive"),
+        (lambda t: t.replace("spm = 500", "spm = -5"), "machine.spm", "outside the plausible range [1, 20000]"),
         (lambda t: t.replace("pulley_teeth = 28", "pulley_teeth = 28.5"), "transmission.pulley_teeth", "whole number"),
         (lambda t: t.replace("[machine]", "[machine]\nspeed_rpm = 3"), "machine.speed_rpm", "unknown field"),
         (lambda t: t.replace('direction = "down"\nhandover = true', 'direction = "up"\nhandover = true'),
@@ -80,7 +80,7 @@ def test_set_bad_value_is_validated(capsys, reference_path):
 
 def test_spm_zero(capsys, reference_path):
     line = _run_error(capsys, ["kinematics", str(reference_path), "--spm", "0", "--plot", "none"])
-    assert "--spm" in line and "positive" in line
+    assert "--spm" in line and "outside the plausible range [1, 20000]" in line
 
 
 def test_unknown_law_on_command_line(capsys, reference_path):
@@ -119,7 +119,7 @@ def test_misspelt_required_key_is_named(write_problem):
      "published_time_s: 37.80 deg"),
     # a move without a span is the span's error, not a later symptom (sampling, division by zero)
     (["timing.intervals[5].span_deg=0", "timing.intervals[6].span_deg=84.9"], "timing.intervals[5].span_deg",
-     "needs a positive span"),
+     "needs a span of at least 0.1 deg"),
 ])
 def test_spans_that_would_be_ignored_or_empty(capsys, reference_path, sets, field, words):
     args = ["kinematics", str(reference_path), "--plot", "none"]

@@ -15,7 +15,7 @@ from strokeopt.io.ranges import parse_spm_range
     ("300:420:50", [300.0, 350.0, 400.0]),  # STOP is never passed
     ("30:42:6", [30.0, 36.0, 42.0]),
     ("500:500:10", [500.0]),
-    ("0.5:0.8:0.1", [0.5, 0.6, 0.7, 0.8]),  # round-off does not drop STOP
+    ("1.5:1.8:0.1", [1.5, 1.6, 1.7, 1.8]),  # round-off does not drop STOP
 ])
 def test_values(text, values):
     assert parse_spm_range(text) == pytest.approx(values)
@@ -28,10 +28,17 @@ def test_values(text, values):
     ("300:200:10", "STEP > 0 and STOP >= START"),
     ("300:400:0", "STEP > 0 and STOP >= START"),
     ("300:400:-10", "STEP > 0 and STOP >= START"),
-    ("0", "speeds must be positive"),
-    ("-300:400:50", "speeds must be positive"),
-    ("300:inf:50", "speeds must be positive"),
-    ("nan", "speeds must be positive"),
+    ("0", "0 spm is outside the plausible range [1, 20000]"),
+    ("-300:400:50", "-300 spm is outside the plausible range [1, 20000]"),
+    ("300:inf:50", "every number must be finite"),
+    ("nan", "every number must be finite"),
+    # issue 14: a MemoryError, a numpy ValueError and a sweep of 1.9 million design solves before
+    ("400:1e9:1", "1e+09 spm is outside the plausible range"),
+    ("400:inf:50", "every number must be finite"),
+    ("nan:900:50", "every number must be finite"),
+    ("400:900:inf", "every number must be finite"),
+    ("1:20000:1", "20000 stitch rates, more than 2000"),
+    ("1e-12", "outside the plausible range"),
 ])
 def test_refused(text, words):
     with pytest.raises(ProblemError, match="--spm") as exc:

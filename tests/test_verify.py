@@ -29,7 +29,7 @@ def test_load_design_errors(tmp_path):
 
     bad = tmp_path / "design.json"
     bad.write_text('{"format": "strokeopt-design"}')
-    with pytest.raises(ProblemError, match="is missing"):
+    with pytest.raises(ProblemError, match="missing"):
         load_design(bad)
     with pytest.raises(ProblemError, match="no such file"):
         load_design(tmp_path / "none.json")

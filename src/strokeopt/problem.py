@@ -6,7 +6,6 @@ from a problem file; this module holds the object and nothing that reads files.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -22,6 +21,12 @@ if TYPE_CHECKING:
     from .design.settings import DesignSettings
     from .drive.spec import DriveSpec
     from .servo.settings import ServoSettings
+
+
+#: Plausible stitch rates [spm] (``machine.spm``, ``--spm``): from one stitch a minute (a slow indexing
+#: machine) to 20000 spm, twice the fastest textile machines; outside it a cycle is either too long for the
+#: servo simulation's time grid or too short for any move to be driven.
+SPM_RANGE = (1.0, 20000.0)
 
 
 @dataclass(frozen=True)
@@ -63,6 +68,7 @@ class Problem:
         return replace(self, timing=self.timing.with_law(law), default_law=law)
 
     def with_spm(self, spm: float) -> "Problem":
-        if not (isinstance(spm, (int, float)) and math.isfinite(spm) and spm > 0):
-            raise ProblemError(str(self.file), "machine.spm", f"must be positive, got {spm!r}")
+        if not (isinstance(spm, (int, float)) and SPM_RANGE[0] <= spm <= SPM_RANGE[1]):
+            raise ProblemError(str(self.file), "machine.spm", f"{spm!r} is outside the plausible range "
+                                                              f"[{SPM_RANGE[0]:g}, {SPM_RANGE[1]:g}]")
         return replace(self, spm=float(spm))

@@ -16,13 +16,9 @@ DEFAULT_OUT = Path("strokeopt-out")
 
 
 def _spm_value(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise ProblemError("--spm", "", f"expected a number of stitches per minute, got {text!r}") from None
-    if not value > 0 or value != value or value == float("inf"):
-        raise ProblemError("--spm", "", f"must be positive, got {text}")
-    return value
+    from ..io.ranges import parse_spm
+
+    return parse_spm(text)
 
 
 #: What --motor and --pulley-teeth set: the problem field, and for ``solve`` the [design] choice that fixes it.

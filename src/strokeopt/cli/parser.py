@@ -44,7 +44,7 @@ def _stroke_options(p: argparse.ArgumentParser, sweep: bool = False, law: bool =
                    + " (default: machine.spm of the file)")
     if law:
         p.add_argument("--law", help="use this motion law for every move (see 'strokeopt laws')")
-        p.add_argument("--chi", type=float, help="shape parameter chi of the modified sine law (0 < chi <= 0.25)")
+        p.add_argument("--chi", type=float, help="shape parameter chi of the modified sine law (0.001 <= chi <= 0.25)")
 
 
 def _plot_option(p: argparse.ArgumentParser, name: str) -> None:

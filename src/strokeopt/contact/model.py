@@ -150,17 +150,20 @@ def _parse_element(f: "Fields", name: str, kind_default: str, bodies: dict, laws
     if law_name is not None and law_name not in laws:
         raise f.error("force_law", f"unknown force law {law_name!r}; known: {', '.join(sorted(laws)) or 'none'}")
     if law_name is None:
-        stiffness = f.number("stiffness_N_m", min=0.0)
+        # up to 1e12 N/m: penalty contacts are 1e9 (needle bar), elastic links 1e7 (knitting machine); stiffer
+        # only shortens the integrator's steps to nothing
+        stiffness = f.number("stiffness_N_m", min=0.0, max=1e12)
     else:
         if f.has("stiffness_N_m"):
             raise f.error("stiffness_N_m", "give either stiffness_N_m or force_law, not both")
         stiffness = 0.0
-    damping = f.number("damping_N_s_m", 0.0, min=0.0)
+    damping = f.number("damping_N_s_m", 0.0, min=0.0, max=1e7)  # contact damping is 100 N s/m
     label = f.string("label", "")
     acts_while = None
     if kind == "spring":
-        free = f.number("free_length_mm", None, min=0.0)
-        installed = f.number("installed_length_mm", None, min=0.0)
+        # lengths and gaps within 10 m (clearances of 1e-5 m = 0.01 mm are the knitting machine's)
+        free = f.number("free_length_mm", None, min=0.0, max=1e4)
+        installed = f.number("installed_length_mm", None, min=0.0, max=1e4)
         if (free is None) != (installed is None):
             missing = "installed_length_mm" if installed is None else "free_length_mm"
             raise f.error(missing, "give free_length_mm and installed_length_mm together (or neither: no preload)")
@@ -169,11 +172,11 @@ def _parse_element(f: "Fields", name: str, kind_default: str, bodies: dict, laws
             raise f.error("installed_length_mm", f"is longer than the free length ({installed:g} > {free:g} mm): "
                                                  "a compression spring cannot be installed stretched")
     elif kind == "contact":
-        offset = -f.number("gap_mm", min=0.0) * 1e-3
+        offset = -f.number("gap_mm", min=0.0, max=1e4) * 1e-3
     else:  # grip
         offset = 0.0
         cond = _name_list(f, "acts_while", set(bodies), "body", length=2)
-        acts_while = (cond[0], cond[1], f.number("acts_while_offset_mm", 0.0) * 1e-3)
+        acts_while = (cond[0], cond[1], f.number("acts_while_offset_mm", 0.0, min=-1e4, max=1e4) * 1e-3)
     f.finish()
     return Element(name, kind, (pair[0], pair[1]), stiffness, damping, offset,
                    laws.get(law_name) if law_name else None, acts_while, label)
@@ -191,7 +194,9 @@ def parse_model(f: "Fields | None") -> Model | None:
         if name == FRAME:
             raise tb.error(name, f"{FRAME!r} is the fixed ground, not a body name")
         bf = tb.table(name)
-        mass = bf.number("mass_g", positive=True) * 1e-3
+        # 1 mg (a needle is 200 mg) to 10 t (a loom sley is 25 kg); a lighter body on a 1e9 N/m contact
+        # vibrates beyond any integrator step
+        mass = bf.number("mass_g", min=1e-3, max=1e7) * 1e-3
         bodies[name] = Body(name, mass, bf.boolean("driven", False), bf.string("label", ""))
         bf.finish()
     tb.finish()
@@ -210,6 +215,8 @@ def parse_model(f: "Fields | None") -> Model | None:
                     or not all(isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c) for c in coeffs)):
                 raise lf.error("coefficients_SI", f"must be a non-empty array of finite numbers c_i of F = sum c_i x^i "
                                                   f"(N, x in m), got {coeffs!r}")
+            if any(abs(c) > 1e30 for c in coeffs):  # the pad's cubic term is 1.6e12 N/m^3
+                raise lf.error("coefficients_SI", f"has a coefficient beyond 1e30 (SI), got {coeffs!r}")
             if coeffs[0] != 0:
                 raise lf.error("coefficients_SI", f"c_0 must be 0 (no force at zero compression), got {coeffs[0]!r}")
             laws[name] = ForceLaw(name, tuple(float(c) for c in coeffs))

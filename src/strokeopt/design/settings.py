@@ -9,8 +9,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from ..drive.transmission import TEETH_RANGE
 from .collocation import Mesh
 from .objectives import OBJECTIVES
+from .solver import check_solver_options
 
 MOTOR_CHOICES = ("fixed", "enumerate", "bonmin")
 PULLEY_CHOICES = ("fixed", "optimise", "continuous")
@@ -58,10 +60,12 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
     if f is None:
         return DesignSettings()
     objective = f.string("objective", "min_peak_torque", choices=tuple(OBJECTIVES))
+    # mesh: 2000 intervals of degree 9 per move is ~20000 collocation points, beyond any solve time worth waiting
     n = f.number("mesh_intervals", 40, integer=True, min=1, max=2000)
     d = f.number("collocation_degree", 3, integer=True, min=1, max=9)
     rest = f.number("rest_order", 2, integer=True, min=1, max=3)
-    jerk = f.number("jerk_max_m_s3", None, positive=True)
+    # jerk bound up to 1e9 m/s^3 (a 1 mm move in 0.1 ms); beyond it leave it out (unbounded)
+    jerk = f.number("jerk_max_m_s3", None, positive=True, max=1e9)
     from_law = f.boolean("jerk_max_from_law", False)
     if from_law and jerk is not None:
         raise f.error("jerk_max_from_law", "give either jerk_max_m_s3 or jerk_max_from_law = true, not both")
@@ -69,15 +73,17 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
         raise f.error("collocation_degree", "rest_order = 3 (jerk continuous) needs collocation_degree >= 2")
     if objective == "min_snap" and d < 2:
         raise f.error("collocation_degree", "min_snap needs collocation_degree >= 2 (snap of the acceleration polynomial)")
-    accuracy = f.number("handover_accuracy_mm", 0.5, positive=True) * 1e-3
+    # 0.1 um (an encoder count of a fine drive) to 100 mm (no constraint on any textile mechanism)
+    accuracy = f.number("handover_accuracy_mm", 0.5, min=1e-4, max=100.0) * 1e-3
     motor_choice = f.string("motor_choice", "fixed", choices=MOTOR_CHOICES)
     pulley = f.string("pulley", "fixed", choices=PULLEY_CHOICES)
-    zmin = f.number("pulley_teeth_min", None, integer=True, min=8)
-    zmax = f.number("pulley_teeth_max", None, integer=True, min=8)
+    zmin = f.number("pulley_teeth_min", None, integer=True, min=TEETH_RANGE[0], max=TEETH_RANGE[1])  # see
+    zmax = f.number("pulley_teeth_max", None, integer=True, min=TEETH_RANGE[0], max=TEETH_RANGE[1])  # transmission
     if zmin is not None and zmax is not None and zmax < zmin:
         raise f.error("pulley_teeth_max", f"must be at least pulley_teeth_min = {zmin}, got {zmax}")
     check_points = f.number("check_points", 20, integer=True, min=2, max=1000)
-    check_tol = f.number("check_tolerance", 0.005, positive=True)
+    # relative violation between nodes: from IPOPT's own precision (1e-12) to 100 % (a check that checks nothing)
+    check_tol = f.number("check_tolerance", 0.005, min=1e-12, max=1.0)
     refinements = f.number("refinements", 2, integer=True, min=0, max=6)
     pulley_inertia = f.boolean("include_pulley_inertia", True)
     solver = f.table("solver", required=False)
@@ -89,6 +95,9 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
                 raise solver.error(key, f"solver options must be numbers, strings or booleans, got {value!r}")
             options[key] = value
         solver.finish()
+        problem = check_solver_options(options)  # asks the solver itself, before any build
+        if problem is not None:
+            raise solver.error(*problem)
     f.finish()
     return DesignSettings(objective, n, d, rest, jerk, from_law, accuracy, motor_choice, pulley, zmin, zmax,
                           check_points, check_tol, refinements, pulley_inertia, options)

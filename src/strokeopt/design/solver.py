@@ -7,11 +7,16 @@ structure and options (:attr:`.nlp.Graph.solvers`) and nothing is printed unless
 
 from __future__ import annotations
 
+import re
+import tempfile
+from functools import cache
+
 import numpy as np
 
 import casadi as ca
 
 from .._stdout import stdout_to
+from ..io.fields import _did_you_mean
 
 #: Default IPOPT options (plain dict, passed through to CasADi's nlpsol).
 DEFAULT_SOLVER_OPTIONS = {
@@ -28,6 +33,92 @@ DEFAULT_SOLVER_OPTIONS = {
 
 #: IPOPT's return statuses of a solution.
 STATUS_OK = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+
+
+#: The solvers a ``[design.solver]`` ``plugin`` may name: IPOPT (the default) and Bonmin (what
+#: ``motor_choice = "bonmin"`` uses); others are not built with strokeopt's CasADi or not handled here.
+PLUGINS = ("ipopt", "bonmin")
+
+
+def check_solver_options(options: dict) -> tuple[str, str] | None:
+    """The first option of ``options`` (``[design.solver]``) the solver refuses, as ``(key, why)``; None if all
+    are good. Asks CasADi and IPOPT themselves, before any design is built: a one-variable NLP is built and
+    solved (a few ms) with each option over :data:`DEFAULT_SOLVER_OPTIONS`."""
+    opts = dict(options)
+    plugin = opts.pop("plugin", "ipopt")
+    if plugin not in PLUGINS or not ca.has_nlpsol(plugin):
+        return "plugin", (f"{plugin!r} is not a solver strokeopt can use here; use 'ipopt' (the default) or "
+                          "'bonmin' (motor_choice = \"bonmin\" chooses it)")
+    for key, value in opts.items():
+        trial = {**DEFAULT_SOLVER_OPTIONS, key: value}
+        if plugin == "bonmin":
+            trial = {k: v for k, v in trial.items() if not k.startswith("ipopt.")}
+        reason = _refusal(plugin, trial)
+        if reason is None:
+            continue
+        message, log = reason
+        name = key.split(".", 1)[1] if key.startswith("ipopt.") else key
+        if "Unknown option" in message or "No such IPOPT option" in message:
+            return key, (f"unknown solver option{_did_you_mean(key, _option_names(plugin))} (CasADi's nlpsol "
+                         f"options, or 'ipopt.NAME' for an IPOPT option)")
+        illegal = re.search(r"Illegal type for \w+: (.*)", message)
+        if illegal:
+            return key, f"wrong type, got {value!r} ({illegal.group(1).strip()})"
+        doc = _ipopt_doc(name) if key.startswith("ipopt.") else ""
+        doc = f" (IPOPT: {doc}, default in parentheses)" if doc else ""
+        if "type mismatch" in message:
+            return key, f"wrong type, got {value!r}{doc}"
+        if "Invalid options were detected" in message:
+            return key, f"{value!r} is not a valid setting{doc}"
+        if message == "Invalid_Option":
+            return key, f"IPOPT refuses {value!r} (Invalid_Option: not available in this IPOPT build?){doc}"
+        found = re.search(r"Exception message: (.*)", log)
+        return key, f"the solver refuses {value!r}: " + (found.group(1).strip() if found else message.splitlines()[-1])
+    return None
+
+
+def _refusal(plugin: str, opts: dict) -> tuple[str, str] | None:
+    """Build and solve ``min x^2`` with ``opts``: None if the solver takes them, else (error, solver output)."""
+    x = ca.SX.sym("x")
+    message = None
+    with tempfile.TemporaryFile(mode="w+") as log:
+        with stdout_to(log.fileno()):
+            try:
+                solver = ca.nlpsol("check_options", plugin, {"x": x, "f": x**2}, opts)
+                solver(x0=1.0)
+                if solver.stats()["return_status"] == "Invalid_Option":
+                    message = "Invalid_Option"
+            except RuntimeError as exc:
+                message = str(exc)
+        log.seek(0)
+        text = log.read()
+    return None if message is None else (message, text)
+
+
+@cache
+def _ipopt_documentation() -> dict[str, str]:
+    """IPOPT's own option list: name -> its range or default as IPOPT prints it (``0 <= (3000) < +inf``)."""
+    x = ca.SX.sym("x")
+    with tempfile.TemporaryFile(mode="w+") as log:
+        with stdout_to(log.fileno()):
+            ca.nlpsol("options", "ipopt", {"x": x, "f": x**2},
+                      {"print_time": False, "ipopt.sb": "yes", "ipopt.print_options_documentation": "yes",
+                       "ipopt.max_iter": 0})(x0=1.0)
+        log.seek(0)
+        text = log.read()
+    lines = re.finditer(r"^([a-z][a-z0-9_]*) +(\S.*?)\s*$", text, flags=re.M)
+    return {m.group(1): re.sub(r"\(\s+", "(", " ".join(m.group(2).split())) for m in lines}
+
+
+def _ipopt_doc(name: str) -> str:
+    return _ipopt_documentation().get(name, "")
+
+
+def _option_names(plugin: str) -> list[str]:
+    names = list(ca.nlpsol_options(plugin))
+    if plugin == "ipopt":
+        names += [f"ipopt.{n}" for n in _ipopt_documentation()]
+    return names
 
 
 def solver_options(settings, extra: dict | None, verbose: bool) -> dict:

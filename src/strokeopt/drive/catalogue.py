@@ -33,7 +33,7 @@ import numpy as np
 
 from ..errors import ProblemError
 from ..io.fields import Fields, _did_you_mean
-from .transmission import PROFILE_PITCH, BeltPulley, pitch_diameter
+from .transmission import PROFILE_PITCH, TEETH_RANGE, BeltPulley, pitch_diameter
 
 RPM = 2 * math.pi / 60  # rad/s per rpm
 KG_CM2 = 1e-4  # kg m^2 per kg cm^2
@@ -250,11 +250,12 @@ def load_catalogue(extra_files=(), builtin: bool = True) -> Catalogue:
                 model=row.string("model", name),
                 maker=row.string("maker", ""),
                 source=row.string("source", ""),
-                rated_speed=row.number("rated_speed_rpm", positive=True) * RPM,
-                rated_torque=row.number("rated_torque_N_m", positive=True),
-                stall_torque=row.number("stall_torque_N_m", positive=True),
-                peak_torque=row.number("peak_torque_N_m", positive=True),
-                rotor_inertia=row.number("rotor_inertia_kg_cm2", positive=True) * KG_CM2,
+                # servo motors: to 100000 rpm and 10 kN m, rotor inertias to 1e6 kg cm^2
+                rated_speed=row.number("rated_speed_rpm", positive=True, max=1e5) * RPM,
+                rated_torque=row.number("rated_torque_N_m", positive=True, max=1e4),
+                stall_torque=row.number("stall_torque_N_m", positive=True, max=1e4),
+                peak_torque=row.number("peak_torque_N_m", positive=True, max=1e5),
+                rotor_inertia=row.number("rotor_inertia_kg_cm2", positive=True, max=1e6) * KG_CM2,
             )
             if motor.peak_torque < motor.rated_torque:
                 raise row.error("peak_torque_N_m", f"{motor.peak_torque:g} is below the rated torque {motor.rated_torque:g}")
@@ -276,10 +277,10 @@ def load_catalogue(extra_files=(), builtin: bool = True) -> Catalogue:
         for row in top.tables("pulley", required=False):
             name = unique("pulley", row)
             profile = row.string("profile", choices=tuple(PROFILE_PITCH))
-            teeth = row.number("teeth", integer=True, min=1)
+            teeth = row.number("teeth", integer=True, min=TEETH_RANGE[0], max=TEETH_RANGE[1])  # transmission.py
             pd = pitch_diameter(profile, teeth)
             if row.has("inertia_kg_cm2"):
-                inertia = row.number("inertia_kg_cm2", positive=True) * KG_CM2
+                inertia = row.number("inertia_kg_cm2", positive=True, max=1e6) * KG_CM2
                 cat.pulleys[name] = Pulley(name, profile, teeth, pd, inertia, "data")
             else:
                 pending.append((row, name, profile, teeth))
@@ -298,9 +299,9 @@ def load_catalogue(extra_files=(), builtin: bool = True) -> Catalogue:
                 if any(b <= a for a, b in zip(grooves, grooves[1:])):
                     raise m.error("grooves", "must increase")
                 cat.belt_methods[profile] = BeltMethod(
-                    profile, m.number("reference_width_mm", positive=True) * 1e-3, tuple(int(g) for g in grooves),
-                    tuple(tension), m.number("peak_tension_factor", positive=True),
-                    m.number("breaking_safety", positive=True), m.string("source", ""))
+                    profile, m.number("reference_width_mm", min=1.0, max=1e3) * 1e-3, tuple(int(g) for g in grooves),
+                    tuple(tension), m.number("peak_tension_factor", min=0.1, max=100.0),
+                    m.number("breaking_safety", min=0.1, max=100.0), m.string("source", ""))
                 m.finish()
             methods.finish()
 
@@ -308,10 +309,12 @@ def load_catalogue(extra_files=(), builtin: bool = True) -> Catalogue:
             name = unique("belt", row)
             profile = row.string("profile", choices=tuple(PROFILE_PITCH))
             cat.belts[name] = Belt(
-                name, profile, row.number("width_mm", positive=True) * 1e-3, row.number("width_factor", positive=True),
-                {cord: row.number(f"breaking_tension_{cord}_N", positive=True) for cord in BELT_CORDS
+                # belts: 1 mm to 1 m wide, breaking tensions and EA up to 1e8 N
+                name, profile, row.number("width_mm", min=1.0, max=1e3) * 1e-3,
+                row.number("width_factor", positive=True, max=1e3),
+                {cord: row.number(f"breaking_tension_{cord}_N", positive=True, max=1e8) for cord in BELT_CORDS
                  if row.has(f"breaking_tension_{cord}_N")},
-                {cord: row.number(f"tensile_stiffness_{cord}_N", positive=True) for cord in BELT_CORDS
+                {cord: row.number(f"tensile_stiffness_{cord}_N", positive=True, max=1e10) for cord in BELT_CORDS
                  if row.has(f"tensile_stiffness_{cord}_N")})
             if not cat.belts[name].breaking_tension:
                 raise row.error("breaking_tension_glass_N", "a belt needs at least one breaking tension "

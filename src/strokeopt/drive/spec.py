@@ -15,7 +15,7 @@ from ..errors import ProblemError
 from .catalogue import BELT_CORDS, load_catalogue
 from .checks import BeltSpec, DriveLimits
 from .load import G, Load, LoadForce
-from .transmission import PROFILE_PITCH
+from .transmission import PROFILE_PITCH, TEETH_RANGE
 
 
 @dataclass(frozen=True)
@@ -55,21 +55,24 @@ class DriveSpec:
 def parse_drive(f, base_dir: Path | None = None) -> DriveSpec:
     """Read the ``[drive]`` table (a :class:`~strokeopt.io.fields.Fields`) of a problem file."""
     motor = f.string("motor", None)
-    mass = f.number("moving_mass_kg", positive=True)
+    # 0.1 g (a knitting machine's screw nut is 3 g) to a tonne (a loom sley is 25 kg)
+    mass = f.number("moving_mass_kg", min=1e-4, max=1e3)
     gravity_dir = f.string("gravity", "down", choices=("down", "up", "off"))
     # positions in problem files are measured upward
     gravity = {"down": -G, "up": G, "off": 0.0}[gravity_dir]
-    limits = DriveLimits(f.number("peak_limit_pct", 300.0, positive=True),
-                         f.number("max_inertia_ratio", 10.0, positive=True))
+    # servo drives give 100-500 % of rated torque for a peak; inertia ratios from 1:10 to 1000:1 are sized
+    limits = DriveLimits(f.number("peak_limit_pct", 300.0, min=50.0, max=1000.0),
+                         f.number("max_inertia_ratio", 10.0, min=0.1, max=1000.0))
     profile = f.string("pulley_profile", "GT3", choices=tuple(PROFILE_PITCH))
-    tmin = f.number("pulley_teeth_min", 14, integer=True, min=1)
-    tmax = f.number("pulley_teeth_max", 52, integer=True, min=1)
+    tmin = f.number("pulley_teeth_min", 14, integer=True, min=TEETH_RANGE[0], max=TEETH_RANGE[1])  # see transmission.py
+    tmax = f.number("pulley_teeth_max", 52, integer=True, min=TEETH_RANGE[0], max=TEETH_RANGE[1])
     if tmax < tmin:
         raise f.error("pulley_teeth_max", f"{tmax} is below pulley_teeth_min {tmin}")
     belt = f.string("belt", None)
     cord = f.string("belt_cord", "glass", choices=BELT_CORDS)
-    service = f.number("belt_service_factor", 1.5, positive=True)
-    allowable = f.number("belt_allowable_tension_N", None, positive=True)
+    # belt catalogues' service factors run 1.0-2.5 (appendix 2: 1.5); a tension above 100 kN is no toothed belt
+    service = f.number("belt_service_factor", 1.5, min=0.5, max=5.0)
+    allowable = f.number("belt_allowable_tension_N", None, min=1.0, max=1e5)
     files = f.raw("catalogues", [])
     if not isinstance(files, list) or not all(isinstance(x, str) for x in files):
         raise f.error("catalogues", "must be an array of file names")
@@ -86,11 +89,12 @@ def parse_drive(f, base_dir: Path | None = None) -> DriveSpec:
         kind = row.string("kind", choices=("spring", "constant"))
         direction = {"up": 1.0, "down": -1.0}[row.string("direction", choices=("up", "down"))]
         if kind == "spring":
-            forces.append(LoadForce(name, kind, direction, row.number("preload_N", 0.0, min=0.0),
-                                    row.number("stiffness_N_m", min=0.0),
-                                    row.number("contact_position_mm") * 1e-3))
+            # forces up to 100 kN, stiffnesses up to 1e9 N/m (a contact, not a spring), positions within 10 m
+            forces.append(LoadForce(name, kind, direction, row.number("preload_N", 0.0, min=0.0, max=1e5),
+                                    row.number("stiffness_N_m", min=0.0, max=1e9),
+                                    row.number("contact_position_mm", min=-1e4, max=1e4) * 1e-3))
         else:
-            forces.append(LoadForce(name, kind, direction, row.number("force_N", min=0.0)))
+            forces.append(LoadForce(name, kind, direction, row.number("force_N", min=0.0, max=1e5)))
         row.finish()
     if len({x.name for x in forces}) != len(forces):
         raise f.error("load_forces", "two load forces have the same name")

@@ -89,6 +89,11 @@ class Transmission:
 #: Tooth pitch [m] of each toothed-belt profile strokeopt knows.
 PROFILE_PITCH = {"GT3": 3e-3}
 
+#: Plausible pulley tooth counts (``transmission.pulley_teeth``, the pulley ranges of [drive] and [design],
+#: catalogue pulleys): below 8 teeth a toothed belt does not wrap a pulley (catalogues start at 10-14),
+#: above 250 a pulley is a flywheel (catalogues end near 150-216).
+TEETH_RANGE = (8, 250)
+
 
 def pitch_diameter(profile: str, teeth) -> float:
     """Pitch diameter [m] of a pulley: ``z * pitch / pi`` (GT3: 3 mm pitch, thesis 4.2)."""

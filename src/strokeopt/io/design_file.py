@@ -39,6 +39,8 @@ import numpy as np
 
 from ..design.collocation import Mesh, MoveSolution, move_piece
 from ..errors import ProblemError
+from ..problem import SPM_RANGE
+from .fields import Fields
 from .plain import to_json
 from ..motion.stroke import StrokeFunction, dwell_piece
 
@@ -111,6 +113,56 @@ def check_out_dir(path: str | Path, option: str = "--out") -> Path:
     return out
 
 
+def validate_design(data: dict, file: str) -> None:
+    """Check what :func:`read_design` rebuilds the stroke from, as a problem file is checked: every field
+    present, of its type, finite and in range, every ``unit_solution`` of the mesh's shape. Raises
+    :class:`ProblemError` naming the file and the field (``moves[1].unit_solution.S``)."""
+    top = Fields(data, file)
+    mesh = top.table("mesh")
+    n = mesh.number("intervals", integer=True, min=1, max=2000)  # the ranges of [design] (design/settings.py)
+    d = mesh.number("degree", integer=True, min=1, max=9)
+    moves = top.tables("moves")
+    intervals = top.tables("intervals")
+    if not intervals:
+        raise top.error("intervals", "is empty: the design file is incomplete")
+    move_of = {}
+    for m in moves:
+        move_of[m.number("interval", integer=True, min=1, max=len(intervals))] = m
+        m.number("stroke_mm", min=0.0, max=1e5)  # the ranges of [timing] (io/problem_file.py)
+        if m.has("direction"):
+            m.string("direction", choices=("up", "down"))
+        u = m.table("unit_solution")
+        for key, shape in (("S", (n + 1,)), ("V", (n + 1,)), ("A", (n, d + 1))):
+            _finite_array(u, key, shape)
+    for k, itv in enumerate(intervals, 1):
+        if itv.number("index", integer=True, min=1, max=len(intervals)) != k:
+            raise itv.error("index", f"must be {k} (intervals in cycle order)")
+        itv.string("name")
+        kind = itv.string("kind", choices=("move", "dwell"))
+        itv.number("t_start_s", min=0.0, max=3600.0)
+        itv.number("duration_s", min=0.0, max=3600.0)
+        itv.number("position_mm", min=-1e5, max=1e5)
+        if kind == "move" and k not in move_of:
+            raise itv.error("kind", f"interval {k} is a move, but no entry of moves has interval = {k}")
+    top.number("spm", min=SPM_RANGE[0], max=SPM_RANGE[1])
+    top.number("cycle_time_s", positive=True, max=3600.0)
+    if data.get("pulley_teeth") is not None:
+        top.number("pulley_teeth", integer=True, min=1, max=10**4)
+
+
+def _finite_array(f: Fields, key: str, shape: tuple[int, ...]) -> None:
+    value = f.raw(key)
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise f.error(key, "must be an array of numbers (a rectangular one)") from None
+    if arr.shape != shape:
+        raise f.error(key, f"has shape {arr.shape}, the mesh needs {shape}: the design file is damaged "
+                           "(write it again with strokeopt solve --out)")
+    if not np.all(np.isfinite(arr)) or any(isinstance(v, bool) for v in np.ravel(np.asarray(value, dtype=object))):
+        raise f.error(key, "must hold finite numbers only: the design file is damaged")
+
+
 def read_design(path: str | Path) -> tuple[dict, StrokeFunction]:
     """Read a ``design.json``: its data and the exact optimal :class:`StrokeFunction` rebuilt from it."""
     path = Path(path)
@@ -122,6 +174,7 @@ def read_design(path: str | Path) -> tuple[dict, StrokeFunction]:
         raise ProblemError(str(path), "", f"is not a readable design file: {exc}") from None
     if not isinstance(data, dict) or data.get("format") != "strokeopt-design":
         raise ProblemError(str(path), "format", "is not a strokeopt design file (format != 'strokeopt-design')")
+    validate_design(data, str(path))
     try:
         mesh = Mesh(int(data["mesh"]["intervals"]), int(data["mesh"]["degree"]))
         moves = {m["interval"]: m for m in data["moves"]}

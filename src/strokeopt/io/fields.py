@@ -2,7 +2,9 @@
 
 Every mistake is reported as ``file: field: what is wrong`` (a
 :class:`~strokeopt.errors.ProblemError`), unknown keys included, so a
-misspelt setting never passes silently. Every section reader of strokeopt
+misspelt setting never passes silently; every number is read with its
+plausible range (:meth:`Fields.number`), so a value no machine has is refused
+rather than computed with. Every section reader of strokeopt
 (problem files, catalogue files, design files) reads through :class:`Fields`.
 
 Overrides (``--set key.path=value`` on the command line, ``overrides=`` in
@@ -60,6 +62,12 @@ class Fields:
 
     def number(self, key: str, default: Any = _REQUIRED, *, min: float | None = None, max: float | None = None,
                positive: bool = False, integer: bool = False) -> float:
+        """A finite number within its plausible range ``[min, max]`` (``positive``: above 0).
+
+        Every numeric field of strokeopt's files is read with its range, written beside the read with a
+        comment saying why (physically plausible, numerically safe); a value outside it is refused as
+        ``file: field: VALUE is outside the plausible range [MIN, MAX]``.
+        """
         if key not in self.data and default is not _REQUIRED:
             self._read.add(key)
             return default
@@ -70,12 +78,8 @@ class Fields:
             raise self.error(key, f"must be finite, got {value!r}")
         if integer and int(value) != value:
             raise self.error(key, f"must be a whole number, got {value!r}")
-        if positive and not value > 0:
-            raise self.error(key, f"must be positive, got {value!r}")
-        if min is not None and value < min:
-            raise self.error(key, f"must be at least {min:g}, got {value!r}")
-        if max is not None and value > max:
-            raise self.error(key, f"must be at most {max:g}, got {value!r}")
+        if (positive and not value > 0) or (min is not None and value < min) or (max is not None and value > max):
+            raise self.error(key, f"{value!r} is outside the plausible range {_range_text(min, max, positive)}")
         return int(value) if integer else float(value)
 
     def string(self, key: str, default: Any = _REQUIRED, *, choices: tuple[str, ...] | None = None) -> str:
@@ -115,6 +119,19 @@ class Fields:
             if key not in self._read:
                 known = sorted(self._read)
                 raise self.error(key, f"unknown field{_did_you_mean(key, known)}; known here: {', '.join(known) or 'none'}")
+
+
+def _range_text(lo: float | None, hi: float | None, positive: bool = False) -> str:
+    """``[1, 2000]``, ``(0, 1e+06]``, ``>= 0``: the range :meth:`Fields.number` enforces, as it reads."""
+    if positive and (lo is None or lo <= 0):
+        left = "(0"
+    elif lo is not None:
+        left = f"[{lo:g}"
+    else:
+        left = None
+    if hi is None:
+        return "> 0" if left == "(0" else f">= {lo:g}" if left else "(any finite number)"
+    return f"{left or '(-inf'}, {hi:g}]"
 
 
 def _kind(value: Any) -> str:

@@ -15,11 +15,11 @@ from ..contact.model import parse_model
 from ..contact.scene import parse_scenes
 from ..design.settings import parse_design
 from ..drive.spec import parse_drive
-from ..drive.transmission import PROFILE_PITCH, BeltPulley
+from ..drive.transmission import PROFILE_PITCH, TEETH_RANGE, BeltPulley
 from ..errors import ProblemError
 from ..motion.laws import LAW_NAMES, LAW_PARAMETERS, MotionLaw, make_law
 from ..motion.timing import INTERVAL_TIMES, Interval, TimingDiagram
-from ..problem import Problem
+from ..problem import SPM_RANGE, Problem
 from ..servo.kernel import ServoErrorTerm
 from ..servo.settings import parse_servo
 from .fields import _REQUIRED, Fields, apply_overrides
@@ -52,8 +52,9 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
     meta.finish()
 
     machine = top.table("machine")
-    spm = machine.number("spm", positive=True)
-    revs = machine.number("cam_revolutions_per_stitch", 1.0, positive=True)
+    spm = machine.number("spm", min=SPM_RANGE[0], max=SPM_RANGE[1])  # problem.SPM_RANGE says why
+    # a cam revolution per 100 stitches to 100 revolutions per stitch: gears and indexing drives, not beyond
+    revs = machine.number("cam_revolutions_per_stitch", 1.0, min=0.01, max=100.0)
     machine.finish()
 
     motion = top.table("motion")
@@ -61,11 +62,12 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
     motion.finish()
 
     timing = _read_timing(top.table("timing"), default_law, revs)
+    _check_cycle(machine, timing, spm)
 
     trans = top.table("transmission")
     trans.string("type", "belt_pulley", choices=("belt_pulley",))
     profile = trans.string("profile", "GT3", choices=tuple(PROFILE_PITCH))
-    teeth = trans.number("pulley_teeth", integer=True, min=1)
+    teeth = trans.number("pulley_teeth", integer=True, min=TEETH_RANGE[0], max=TEETH_RANGE[1])
     trans.finish()
 
     model = parse_model(top.table("model", required=False))
@@ -101,7 +103,7 @@ def _read_law(f: Fields, key: str, default: MotionLaw | None = None) -> MotionLa
     params = {}
     for pname in LAW_PARAMETERS:
         if f.has(pname):
-            params[pname] = f.number(pname)
+            params[pname] = f.number(pname)  # its range is the law's own (motion/laws.py, make_law)
     if name is None:
         if params:
             name = default.name
@@ -111,14 +113,39 @@ def _read_law(f: Fields, key: str, default: MotionLaw | None = None) -> MotionLa
     return make_law(name, where=(f.file, f.where(key)), **params)
 
 
+#: Plausible cycle (cam revolution) time [s]: 1 ms (20000 spm at two stitches a revolution) to 10 min; and the
+#: shortest move a drive can follow [s]. Outside them the stroke's derivatives overflow or the servo
+#: simulation's time grid cannot hold a cycle.
+CYCLE_RANGE_S = (1e-3, 600.0)
+SHORTEST_MOVE_S = 1e-4
+
+
+def _check_cycle(machine: Fields, timing: TimingDiagram, spm: float) -> None:
+    """The stitch rate, cam revolutions per stitch and spans together: a cycle and moves a drive can make."""
+    period = timing.period(spm)
+    if not CYCLE_RANGE_S[0] <= period <= CYCLE_RANGE_S[1]:
+        raise machine.error("spm", f"{spm:g} spm at cam_revolutions_per_stitch = {timing.cam_revolutions_per_stitch:g} "
+                                   f"is a cycle of {period:.3g} s, outside the plausible range "
+                                   f"[{CYCLE_RANGE_S[0]:g}, {CYCLE_RANGE_S[1]:g}] s")
+    sch = timing.schedule(spm)
+    move = min(d for itv, d in zip(timing.intervals, sch.duration) if itv.is_move)
+    if move < SHORTEST_MOVE_S:
+        raise machine.error("spm", f"at {spm:g} spm the shortest move lasts {move * 1e6:.3g} us, below the "
+                                   f"{SHORTEST_MOVE_S * 1e6:g} us a drive can follow: lower the rate or widen the move")
+
+
 #: How far the span a published time implies may differ from the file's span_deg [deg]: the
 #: thesis's own times and spans differ by up to 0.9 deg (reference problem, move 3 and dwell 6).
 PUBLISHED_SPAN_TOLERANCE_DEG = 1.0
+#: The shortest span of a move [deg of cam angle]: below it a move is an impact, not a cam motion.
+MOVE_SPAN_MIN_DEG = 0.1
 
 
 def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagram:
     times = f.string("interval_times", "nominal", choices=INTERVAL_TIMES)
-    position = f.number("start_position_mm") * 1e-3
+    # lengths in mm: within +-100 m of the origin, strokes up to 100 m (a loom sley swings 0.1 m, the known
+    # optima use 1 m, a gantry tens of metres), so no position overflows a kinematic table
+    position = f.number("start_position_mm", min=-1e5, max=1e5) * 1e-3
     rows = f.tables("intervals")
     if len(rows) < 2:
         raise f.error("intervals", f"needs at least two intervals (a move and a dwell), got {len(rows)}")
@@ -126,13 +153,16 @@ def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagra
     n_moves = 0
     for row in rows:
         name = row.string("name")
-        span = row.number("span_deg", min=0.0)
-        stroke = row.number("stroke_mm", 0.0, min=0.0) * 1e-3
-        published = row.number("published_time_s", None, min=0.0) if times == "nominal" else row.number("published_time_s", positive=True)
+        span = row.number("span_deg", min=0.0, max=360.0)
+        stroke = row.number("stroke_mm", 0.0, min=0.0, max=1e5) * 1e-3
+        # published interval times: a cycle of at most an hour (only their proportions are used)
+        published = row.number("published_time_s", None, min=0.0, max=3600.0) if times == "nominal" else \
+            row.number("published_time_s", positive=True, max=3600.0)
         handover = row.boolean("handover", False)
         if stroke > 0:
-            if span <= 0:
-                raise row.error("span_deg", f"a move ({stroke * 1e3:g} mm) needs a positive span, got {span:g} deg")
+            if span < MOVE_SPAN_MIN_DEG:
+                raise row.error("span_deg", f"a move ({stroke * 1e3:g} mm) needs a span of at least "
+                                            f"{MOVE_SPAN_MIN_DEG:g} deg, got {span:g} deg")
             direction = row.string("direction", choices=("up", "down"))
             law = _read_law(row, "law", default_law)
             n_moves += 1

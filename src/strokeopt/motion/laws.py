@@ -97,7 +97,9 @@ _LAWS: dict[str, _LawSpec] = {
     "modified_sine": _LawSpec(
         "modified sine",
         _modified_sine,
-        params={"chi": (0.125, 0.0, 0.25, True)},
+        # chi in [0.001, 0.25]: 0.25 is the cycloid; the peak jerk grows as 1/chi, and below 0.001 the law is
+        # the cosine law with a jerk spike a thousand times its own (chi -> 0 overflows it)
+        params={"chi": (0.125, 0.001, 0.25, False)},
         breaks=lambda chi: (chi, 1 - chi),
     ),
     "sine": _LawSpec("sine (cycloidal)", _sine),
@@ -262,12 +264,13 @@ def make_law(name: str, *, where: tuple[str, str] = ("<law>", "law"), **params: 
         allowed = ", ".join(spec.params) or "none"
         raise ProblemError(file, fld, f"law {name!r} takes no parameter {extra} (parameters: {allowed})")
     full = {}
+    table = fld.rsplit(".", 1)[0] + "." if "." in fld else ""  # "motion.law" -> the parameter is "motion.chi"
     for pname, (default, lo, hi, lo_open) in spec.params.items():
         value = params.get(pname, default)
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise ProblemError(file, pname, f"must be a number, got {value!r}")
+            raise ProblemError(file, table + pname, f"must be a number, got {value!r}")
         if (value <= lo if lo_open else value < lo) or value > hi:
-            raise ProblemError(file, pname, f"{value!r} is out of range {'(' if lo_open else '['}{lo:g}, {hi:g}] for law {name!r}")
+            raise ProblemError(file, table + pname, f"{value!r} is out of range {'(' if lo_open else '['}{lo:g}, {hi:g}] for law {name!r}")
         full[pname] = float(value)
     return _cached_law(name, tuple(sorted(full.items())))
 

@@ -59,18 +59,22 @@ def parse_servo(f, timing=None, spm: float | None = None) -> ServoSettings:
     than the shortest move.
     """
     s = ServoSettings(file=f.file)
-    tp = f.number("position_sampling_us", 250.0, positive=True) * 1e-6
-    tc = f.number("control_cycle_us", 500.0, positive=True) * 1e-6
-    ti = f.number("current_loop_time_constant_us", 125.0, min=0.0) * 1e-6
-    counts = f.number("encoder_counts_per_rev", 16384, integer=True, min=1)
+    # servo drives sample and read their tables every 31.25 us to a few ms: 1 us to 100 ms is plausible
+    tp = f.number("position_sampling_us", 250.0, min=1.0, max=1e5) * 1e-6
+    tc = f.number("control_cycle_us", 500.0, min=1.0, max=1e5) * 1e-6
+    ti = f.number("current_loop_time_constant_us", 125.0, min=0.0, max=1e5) * 1e-6
+    # from a 1-line resolver to 2^32 counts (a 32-bit absolute encoder)
+    counts = f.number("encoder_counts_per_rev", 16384, integer=True, min=4, max=2**32)
     vff = f.boolean("velocity_feedforward", True)
     aff = f.boolean("acceleration_feedforward", True)
     lff = f.boolean("load_feedforward", True)
     tuning = f.string("tuning", "symmetric_optimum", choices=TUNING_RULES)
-    bw = f.number("speed_bandwidth_Hz", None, positive=True)
-    kp = f.number("position_gain_1_s", None, positive=True)
-    kv = f.number("speed_gain_N_m_s_rad", None, positive=True)
-    tn = f.number("speed_integral_time_ms", None, positive=True)
+    # gains within what a sampled loop can hold: bandwidths to 100 kHz, gains to 1e5 1/s and 1e4 N m s/rad,
+    # integral times from 1 us to 1000 s
+    bw = f.number("speed_bandwidth_Hz", None, positive=True, max=1e5)
+    kp = f.number("position_gain_1_s", None, positive=True, max=1e5)
+    kv = f.number("speed_gain_N_m_s_rad", None, positive=True, max=1e4)
+    tn = f.number("speed_integral_time_ms", None, min=1e-3, max=1e6)
     if tuning == "manual":
         for key, value in (("position_gain_1_s", kp), ("speed_gain_N_m_s_rad", kv), ("speed_integral_time_ms", tn)):
             if value is None:
@@ -82,23 +86,26 @@ def parse_servo(f, timing=None, spm: float | None = None) -> ServoSettings:
             if value is not None:
                 raise f.error(key, "is only used with tuning = \"manual\" (the symmetric optimum sets the gains; "
                                    "change speed_bandwidth_Hz instead)")
-    span = f.number("belt_span_mm", 139.5, positive=True) * 1e-3
-    carrier = f.number("carrier_from_pulley_mm", None, positive=True)
+    # belt lengths: spans from 1 mm to 20 m (a belt conveyor), widths 1 mm to 1 m
+    span = f.number("belt_span_mm", 139.5, min=1.0, max=2e4) * 1e-3
+    carrier = f.number("carrier_from_pulley_mm", None, positive=True, max=2e4)
     carrier = None if carrier is None else carrier * 1e-3
     if carrier is not None and not carrier < span:
         raise f.error("carrier_from_pulley_mm", f"{carrier * 1e3:g} mm is not inside the belt span of {span * 1e3:g} mm")
-    length = f.number("belt_length_mm", None, positive=True)
+    length = f.number("belt_length_mm", None, positive=True, max=5e4)
     length = None if length is None else length * 1e-3
     if length is not None and not length > 2 * span:
         raise f.error("belt_length_mm", f"{length * 1e3:g} mm cannot wrap two pulleys {span * 1e3:g} mm apart")
-    stiff = f.number("belt_specific_stiffness_N_per_mm", None, positive=True)
-    width = f.number("belt_width_mm", 9.0, positive=True) * 1e-3
+    # specific stiffness of belts: ~1e3 (rubber) to ~1e6 N per mm of width (steel cord); a decade each way
+    stiff = f.number("belt_specific_stiffness_N_per_mm", None, min=100.0, max=1e7)
+    width = f.number("belt_width_mm", 9.0, min=1.0, max=1e3) * 1e-3
     zeta = f.number("belt_damping_ratio", 0.05, positive=True, max=1.0)
     order = f.number("pade_order", 3, integer=True, min=1, max=8)
     window = f.number("handover_window_deg", 10.0, min=0.0, max=90.0)
     f.finish()
     if timing is not None and spm is not None:
-        check_sampling(tp, tc, timing, spm, (f.file, f.where("position_sampling_us"), f.where("control_cycle_us")))
+        check_sampling(tp, tc, timing, spm, (f.file, f.where("position_sampling_us"), f.where("control_cycle_us")),
+                       simulate=False)
     return replace(s, position_sampling=tp, control_cycle=tc, current_loop_time_constant=ti, encoder_counts=counts,
                    velocity_feedforward=vff, acceleration_feedforward=aff, load_feedforward=lff, tuning=tuning,
                    speed_bandwidth=None if bw is None else 2 * math.pi * bw, position_gain=kp, speed_gain=kv,
@@ -113,14 +120,29 @@ def shortest_move(timing, spm: float) -> float:
     return float(min(d for itv, d in zip(timing.intervals, sch.duration) if itv.is_move))
 
 
+#: The most samples of the servo's sampling a cycle may hold for the servo simulation (accuracy, tradeoff):
+#: its time grid has 12 to 25 points a sample, ~60 MB at this count (500 spm and 250 us: 960 samples).
+MAX_SAMPLES_PER_CYCLE = 20000
+
+
 def check_sampling(tp: float, tc: float, timing, spm: float, where=("", "servo.position_sampling_us",
-                                                                     "servo.control_cycle_us")) -> None:
-    """A sampling time as long as a move cannot follow it: a :class:`ProblemError` naming the field."""
+                                                                     "servo.control_cycle_us"),
+                   simulate: bool = True) -> None:
+    """A sampling time as long as a move cannot follow it: a :class:`ProblemError` naming the field. With
+    ``simulate`` (the servo simulation is about to run) a cycle of more than :data:`MAX_SAMPLES_PER_CYCLE`
+    samples is refused too."""
     move = shortest_move(timing, spm)
     for value, fld in ((tp, where[1]), (tc, where[2])):
         if value >= move:
             raise ProblemError(where[0], fld, f"{value * 1e6:g} us is not shorter than the shortest move "
                                               f"({move * 1e6:.0f} us at {spm:g} spm): the drive could not follow it")
+    period = timing.period(spm)
+    for value, fld in ((tp, where[1]), (tc, where[2])):
+        if simulate and period / value > MAX_SAMPLES_PER_CYCLE:
+            raise ProblemError(where[0], fld, f"{value * 1e6:g} us makes {period / value:.0f} samples of a {period:.3g} s "
+                                              f"cycle ({spm:g} spm), more than the servo simulation's "
+                                              f"{MAX_SAMPLES_PER_CYCLE}: sample at least every "
+                                              f"{period / MAX_SAMPLES_PER_CYCLE * 1e6:.0f} us or raise the stitch rate")
 
 
 
