@@ -149,8 +149,11 @@ def cmd_tradeoff(args) -> int:
             raise ProblemError("--accuracies", "", f"every accuracy must be positive, got {args.accuracies!r}")
     if not args.resolution > 0:
         raise ProblemError("--resolution", "", f"must be positive, got {args.resolution!r}")
-    progress = progress_bar(args, "tradeoff")
-    report = tradeoff(problem, accuracies, strokes=args.strokes, resolution=args.resolution, progress=progress)
+    def progress(step: str, text: str) -> None:  # a line per step on stderr (stdout: the table or the JSON)
+        print(f"tradeoff {step}: {text}", file=sys.stderr, flush=True)
+
+    report = tradeoff(problem, accuracies, strokes=args.strokes, resolution=args.resolution,
+                      progress=None if args.json else progress)
     report = {"status": "ok", **report, "drive": drive_used(args, problem)}
     if args.json:
         _emit(to_json(report))

@@ -129,12 +129,15 @@ def build_parser() -> argparse.ArgumentParser:
                                    "drive. --spm START:STOP:STEP sweeps the stitch rate (warm-started) and prints the "
                                    "fastest feasible rate; --study mesh prints what accuracy costs in time. "
                                    "Objectives: min_peak_torque, min_rms_torque, min_energy, min_peak_accel, "
-                                   "min_accel_squared, min_jerk, min_snap.",
+                                   "min_accel_squared, min_jerk, min_snap; min_time: the highest stitch rate "
+                                   "within every limit (the cycle time free, --spm the start of the search), "
+                                   "with the binding limits named.",
                        epilog="Examples: strokeopt solve problems/deco2000_needle_bar.toml; "
                               "strokeopt solve problems/deco2000_needle_bar.toml --spm 600 --out out/; "
                               "strokeopt solve problems/deco2000_needle_bar.toml --spm 400:900:50; "
                               "strokeopt solve problems/known_optima/min_jerk.toml")
-    p.add_argument("--objective", help="objective (overrides design.objective of the file)")
+    p.add_argument("--objective", help="objective (overrides design.objective of the file); min_time answers "
+                                       "'how fast can it go?'")
     _stroke_options(p, sweep=True, law=False)
     _drive_options(p, "the solve re-solves the stroke at that rate on that drive. --motor/--pulley-teeth fix the "
                       "motor/pulley (the same as --set design.motor_choice='\"fixed\"' / design.pulley='\"fixed\"')")
@@ -223,8 +226,10 @@ def build_parser() -> argparse.ArgumentParser:
                                    "rate at which the handover error (strokeopt accuracy) and every drive limit still "
                                    "hold, with the problem's classic law and, separately, with the optimal stroke "
                                    "(strokeopt solve with the accuracy constraint, on the problem's motor and pulley); "
-                                   "each point names its binding limit. The optimal stroke needs one design solve "
-                                   "per trial rate: it takes minutes.",
+                                   "each point names its binding limit. The optimal stroke: one min_time design "
+                                   "solve per accuracy (loosest first, each warm-started from the last), confirmed "
+                                   "by the full servo simulation (below a rejected rate, a short search with "
+                                   "fixed-rate designs); a line per step on stderr.",
                        epilog="Example: strokeopt tradeoff problems/deco2000_needle_bar.toml --strokes classic "
                               "--accuracies 0.05,0.1,0.5")
     p.add_argument("--accuracies", metavar="MM,MM,...", help="required accuracies in mm (default 0.02,0.03,0.05,0.1,0.2,0.3,0.5,1)")

@@ -109,7 +109,7 @@ class DriveModel:
         g.radius = radius
         peak_what = (f"peak_torque (peak torque, {motor_name}: {'%.3g' % peak_num} N m"
                      f"{', drive limit %g %% of rated' % drive.limits.peak_limit_pct if pct * (rated_num) < peak_num + 1e-12 and not choice.candidates else ''})")
-        period = b.param("period", lambda r: r.period)
+        period = b.param("period", lambda r: r.period) * g.time_scale
         return cls(radius, r_ref, inertia, trans, rotor, peak_lim, rated, speed, peak_num, rated_num, speed_num,
                    motor_name, peak_what, drive.tau_ref, period)
 

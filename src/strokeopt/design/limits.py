@@ -72,8 +72,11 @@ class JerkBound(Limit):
         mv, b, x = g.request.moves[k], g.built, g.vars[k]
         if mv.jerk_bound is None:
             return
-        # the bound on the unit jerk
+        # the bound on the unit jerk; a bound in m/s^3 allows the unit jerk to grow with the cube of a
+        # free cycle time (a bound from the file's law scales with the law's own jerk: constant)
         jb = b.param(f"jerk bound {mv.index}", lambda r, k=k: r.moves[k].jerk_bound / r.moves[k].j_scale)
+        if not g.request.settings.jerk_max_from_law:
+            jb = jb * g.time_scale**3
         hull = x.hull("j") / jb  # Bernstein coefficients: bounds the jerk everywhere, not only at nodes
         lim = LimitGroup(f"jerk bound move {mv.index}", "jerk bound", mv.jerk_bound, "m/s^3",
                          lambda sig, jb=mv.jerk_bound: jb * (1 + sig), mv.index)

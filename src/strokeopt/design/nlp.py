@@ -20,7 +20,7 @@ import numpy as np
 
 from .collocation import MoveSolution, MoveVariables
 from .limits import MOVE_LIMITS, LimitGroup, build_drive
-from .objectives import build_objective
+from .objectives import TIME_SCALE, TIME_SCALE_BOUNDS, build_objective, free_time
 from .pins import initial_pin_times, pin_intervals, pin_windows, pins_fit
 from .request import SolveRequest, initial_unit
 
@@ -156,7 +156,9 @@ class Graph:
     built: Built
     pins: tuple = ()  # the pins' windows (move, switch position, first mesh interval or None)
     vars: list = field(default_factory=list)  # MoveVariables per move
-    T: list = field(default_factory=list)  # move durations (parameters)
+    T: list = field(default_factory=list)  # move durations (parameters, times the time scale)
+    #: the cycle time relative to the request's (1.0; a decision variable of a free-time objective)
+    time_scale: Any = 1.0
     f: Any = None
     solvers: dict = field(default_factory=dict)
     # the drive (see limits.build_drive)
@@ -194,7 +196,10 @@ def add_moves(g: Graph) -> None:
     b, req = g.built, g.request
     settings, mesh, moves = req.settings, req.mesh, req.moves
     n, d = mesh.intervals, mesh.degree
-    g.T = [b.param(f"T{mv.index}", lambda r, k=k: r.moves[k].duration) for k, mv in enumerate(moves)]
+    if free_time(req.objective):  # every duration is the cycle time times its fixed fraction of the cycle
+        g.time_scale = b.var(TIME_SCALE, (1, 1), TIME_SCALE_BOUNDS[0], TIME_SCALE_BOUNDS[1], 1.0)
+    g.T = [b.param(f"T{mv.index}", lambda r, k=k: r.moves[k].duration) * g.time_scale
+           for k, mv in enumerate(moves)]
     for k, mv in enumerate(moves):
         s_lb, s_ub = np.full(n + 1, -np.inf), np.full(n + 1, np.inf)
         s_lb[0] = s_ub[0] = 0.0

@@ -21,6 +21,11 @@ from ..errors import ProblemError
 #: Weight of the jerk-squared regularisation added to epigraph (peak) objectives.
 SMOOTHING = 1e-7
 
+#: The decision variable of a free-time objective: the cycle time relative to the request's (every
+#: interval keeps its fixed fraction of the cycle), and its bounds (one solve may move the rate 4x).
+TIME_SCALE = "time scale"
+TIME_SCALE_BOUNDS = (0.25, 4.0)
+
 
 def _smoothing(g):
     """A tiny integral of jerk squared (unit form, relative to the 3-4-5 law's 720 per move).
@@ -93,14 +98,26 @@ def min_energy(g):
     return g.move_sq
 
 
+def min_time(g):
+    """The shortest cycle: the time scale (:data:`TIME_SCALE`, the cycle time over the request's) under
+    every limit. Its value is the stitch period [s] (``60 / spm``); the rate it allows is the request's
+    divided by the scale. The numbers computed at the request's rate (the servo term's kernel and load
+    error) are exact at scale 1: :func:`~.refine.solve_one` re-solves at the new rate until it stays."""
+    g.unit, g.transform = "s", (lambda f, r: f * 60.0 / r.spm)
+    g.objective_expr = g.time_scale
+    return g.time_scale + _smoothing(g)
+
+
 @dataclass(frozen=True)
 class Objective:
-    """An objective: what it minimises, whether it needs the drive, and its builder."""
+    """An objective: what it minimises, whether it needs the drive, its builder, and whether the cycle
+    time is a decision variable (``free_time``: :data:`TIME_SCALE`)."""
 
     name: str
     description: str
     needs_drive: bool
     build: Callable
+    free_time: bool = False
 
 
 REGISTRY = {o.name: o for o in (
@@ -115,6 +132,8 @@ REGISTRY = {o.name: o for o in (
     Objective("min_jerk", "integral of jerk squared over the moves", False, _integral_objective("j", 5, "m^2/s^5")),
     Objective("min_snap", "integral of snap (4th derivative) squared over the moves", False,
               _integral_objective("snap", 7, "m^2/s^7")),
+    Objective("min_time", "shortest stitch period (highest stitch rate) within every limit of the design, the "
+              "interval times fixed fractions of the cycle", True, min_time, free_time=True),
 )}
 #: Every objective, with what it minimises.
 OBJECTIVES = {name: o.description for name, o in REGISTRY.items()}
@@ -122,6 +141,12 @@ OBJECTIVES = {name: o.description for name, o in REGISTRY.items()}
 KINEMATIC_OBJECTIVES = tuple(name for name, o in REGISTRY.items() if not o.needs_drive)
 #: Objectives that need the drive's load torque.
 TORQUE_OBJECTIVES = tuple(name for name, o in REGISTRY.items() if o.needs_drive)
+
+
+def free_time(objective: str) -> bool:
+    """Whether ``objective`` makes the cycle time a decision variable."""
+    found = REGISTRY.get(objective)
+    return found is not None and found.free_time
 
 
 def needs_drive_error(problem, objective: str) -> ProblemError:

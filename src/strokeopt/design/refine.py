@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import casadi as ca
@@ -24,12 +24,18 @@ from .diagnose import diagnose
 from .fine_grid import drive_checks_fine, fine_grid_report
 from .limits import ENFORCED_CHECKS
 from .nlp import Nlp, prepare
+from .objectives import TIME_SCALE, free_time
 from .pins import pin_intervals, pin_times, pins_fit
 from .request import SolveRequest
 from .solver import STATUS_OK, solve_nlp
+from ..errors import SolverError
 
 #: Re-solves that move the pinned points at most, per mesh.
 PIN_ITERATIONS = 5
+#: A free cycle time (min_time): re-solves at the rate found at most, and the relative change of the
+#: rate below which it has settled.
+RATE_ITERATIONS = 8
+RATE_TOLERANCE = 1e-3
 
 
 @dataclass
@@ -49,6 +55,8 @@ class Outcome:
     continuous_radius: float | None = None
     #: the handover error terms evaluated at the solution ((name, error [m]); None: read them from the NLP)
     handover: list | None = None
+    #: a free cycle time (min_time): the rate [spm] each re-solve found, the last the answer
+    rates: list = field(default_factory=list)
 
     def handover_values(self) -> list[tuple[str, float]]:
         """(name, error [m]) of every handover error term at the solution."""
@@ -87,7 +95,56 @@ def pins_in_place(nlp: Nlp, x: np.ndarray, new: dict) -> bool:
     return bool(np.max(np.abs(after - before), initial=0.0) <= req.settings.check_tolerance / 10)
 
 
+def solution_request(nlp: Nlp, x: np.ndarray) -> SolveRequest:
+    """The request at the rate of the solution ``x``: the request's own, or with a free cycle time
+    (``min_time``) the request's rate divided by the solution's time scale."""
+    scale = nlp.graph.time_scale
+    if not isinstance(scale, (ca.MX, ca.SX)):
+        return nlp.request
+    return replace(nlp.request, spm=nlp.request.spm / float(nlp.value(scale, x).item()))
+
+
 def solve_one(req: SolveRequest) -> Outcome:
+    """One NLP with fixed parts (or a continuous radius / a Bonmin motor), refined where the fine grid demands;
+    with a free cycle time (``min_time``), re-solved at the rate found until it stays (:func:`solve_free_time`)."""
+    if free_time(req.objective):
+        return solve_free_time(req)
+    return solve_at_rate(req)
+
+
+def solve_free_time(req: SolveRequest) -> Outcome:
+    """The highest rate as a fixed point: the NLP's numbers that depend on the rate (the servo term's
+    kernel weights and load error, the period) are computed at the request's rate and are exact at
+    time scale 1; the solve at a rate gives a new rate (the request's over the time scale), the next
+    solve is warm-started there, until the rate moves by less than :data:`RATE_TOLERANCE` (relative).
+    The outcome is read at the last rate (time scale 1: every number exact)."""
+    spm, warm, radius0, mesh = req.spm, req.warm, req.radius0, req.mesh
+    total_time, iterations, rates = 0.0, 0, []
+    for _ in range(RATE_ITERATIONS):
+        out = solve_at_rate(replace(req, spm=spm, warm=warm, radius0=radius0, mesh=mesh))
+        total_time += out.solve_time
+        iterations += out.iterations
+        rate = solution_request(out.nlp, out.x).spm
+        rates.append(rate)
+        warm, radius0, mesh = out.sols, out.radius, out.nlp.request.mesh
+        settled = abs(rate / spm - 1.0) <= RATE_TOLERANCE
+        spm = rate
+        if settled:
+            break
+    else:
+        raise SolverError(f"min_time: the stitch rate did not settle within {RATE_ITERATIONS} re-solves "
+                          f"(relative change {RATE_TOLERANCE:g}): " + ", ".join(f"{r:.2f}" for r in rates) + " spm")
+    nlp = out.nlp
+    final = prepare(replace(nlp.request, spm=spm))  # the same structure, its numbers at the rate found
+    x = out.x.copy()
+    offset, _ = final.built.offsets[TIME_SCALE]
+    x[offset] = 1.0
+    out = replace(out, nlp=final, x=x, solve_time=total_time, iterations=iterations, rates=rates)
+    out.value = final.graph.transform(objective_value(final, None, x), final.request)
+    return out
+
+
+def solve_at_rate(req: SolveRequest) -> Outcome:
     """One NLP with fixed parts (or a continuous radius / a Bonmin motor), refined where the fine grid demands."""
     settings, choice, drive = req.settings, req.choice, req.drive
     total_time, iterations = 0.0, 0
@@ -115,7 +172,8 @@ def solve_one(req: SolveRequest) -> Outcome:
             if not violated and pins_in_place(nlp, x, new):
                 break
             pins, warm, enforce = new, sols, enforce or violated
-        fine, _ = fine_grid_report(nlp.request.moves, sols, settings.check_points)
+        rated = solution_request(nlp, x)  # the rate the solution runs at
+        fine, _ = fine_grid_report(rated.moves, sols, settings.check_points)
         radius = motor = None
         worst = fine["worst_relative_violation"]
         if drive is not None:
@@ -124,7 +182,7 @@ def solve_one(req: SolveRequest) -> Outcome:
             if choice.candidates:
                 pick = nlp.value(nlp.graph.pick, x).ravel()
                 motor = choice.candidates[int(np.argmax(pick))]
-            checks = drive_checks_fine(drive, motor, choice.teeth, radius, req.problem, req.spm, nlp.request.moves,
+            checks = drive_checks_fine(drive, motor, choice.teeth, radius, req.problem, rated.spm, rated.moves,
                                        sols, settings.check_points)
             over = [max(0.0, -c.margin) for c in checks if c.name in ENFORCED_CHECKS and math.isfinite(c.margin)]
             if req.objective == "min_peak_torque":  # the epigraph held at the nodes; the fine grid reads the peak

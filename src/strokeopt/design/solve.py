@@ -39,9 +39,9 @@ from .collocation import Mesh
 from .fine_grid import move_results
 from .limits import DRIVE_LIMITS, MOVE_LIMITS
 from .nlp import prepare
-from .objectives import OBJECTIVES, TORQUE_OBJECTIVES, needs_drive_error, unknown_objective_error
+from .objectives import OBJECTIVES, TORQUE_OBJECTIVES, free_time, needs_drive_error, unknown_objective_error
 from .parts import choose_parts
-from .refine import Outcome, solve_one
+from .refine import RATE_TOLERANCE, Outcome, solve_one
 from .request import DriveChoice, DriveSetup, SolveRequest
 from .result import Design, stroke_from_solutions
 from .settings import DesignSettings
@@ -94,10 +94,11 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
         best, teeth, notes = choose_parts(req, progress)
         # the handover accuracy terms at the chosen design (lazy: re-solved with them only if violated)
         choice = DriveChoice(best.motor, teeth, None if teeth else drive.radius_bounds())
-        best = _with_terms(replace(req, choice=choice), best)
+        best = _with_terms(replace(req, choice=choice, spm=best.nlp.request.spm), best)
         motor = best.motor
         pd = 2 * best.radius
     wall = time.perf_counter() - t_start
+    spm = best.nlp.request.spm  # the request's, or the highest rate of min_time
     nlp, sols = best.nlp, best.sols
     stroke = stroke_from_solutions(problem, spm, sols, label=f"optimal ({objective})")
     moves = move_results(nlp.request.moves, sols)
@@ -127,6 +128,8 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     if drive is not None:
         # the objective as the fine grid reads it (the NLP saw the nodes)
         design.objective_value = _fine_objective(design, best) if objective in TORQUE_OBJECTIVES else best.value
+    if free_time(objective):
+        design.notes.insert(0, _rate_note(design, best))
     if drive is not None and not best.handover_values():
         why = ("the problem has no [servo] section (servo loop and belt model)" if not terms
                and getattr(problem, "servo", None) is None else "no handover error term applies (error_terms)")
@@ -137,6 +140,15 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
                             f"{100 * settings.check_tolerance:g} %) after {settings.refinements} refinements: "
                             f"use more mesh intervals")
     return design
+
+
+def _rate_note(design: Design, best: Outcome) -> str:
+    """What a free cycle time found: the highest rate, the limits that bind it, the re-solves it took."""
+    binding = [name for name in design.active_constraints if not name.startswith("handover position")]
+    return (f"highest stitch rate {design.spm:.1f} spm (stitch period {60e3 / design.spm:.3f} ms), bound by: "
+            f"{'; '.join(binding) or 'no limit (the time scale reached its bound)'}; the rate settled within "
+            f"{100 * RATE_TOLERANCE:g} % after {len(best.rates)} solves ("
+            + " -> ".join(f"{r:.1f}" for r in best.rates) + " spm)")
 
 
 def _with_terms(req: SolveRequest, best: Outcome) -> Outcome:

@@ -52,7 +52,8 @@ def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step
     limit, the sampling is shorter than every move, and the handover error is
     at most the accuracy *at this rate and at every lower one* (so the curve
     is monotone by definition: the error need not rise strictly with speed).
-    The binding limit is the one that fails just above the highest rate.
+    The binding limit is the one that fails just above the highest rate. ``progress(step, text)``:
+    called with a line per simulated rate of the grid.
     """
     from ..drive.sizing import max_spm as drive_max_spm
 
@@ -83,11 +84,13 @@ def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step
     top = min(drive_max, sampling_max * (1 - 1e-9))
     top_binding = drive_binding if drive_max <= sampling_max else "sampling"
     grid = list(np.arange(lowest, top, step)) + [top]
-    it = progress(grid) if progress else grid
     errors = []
-    for spm in it:
+    for spm in grid:
         e, sat = evaluate(spm)
         errors.append((spm, e, sat))
+        if progress:
+            progress(problem.default_law.name, f"{spm:.0f} spm: handover error {e * 1e3:.4f} mm"
+                     + (" (torque command limited)" if sat else ""))
     points = []
     best = None
     for acc in accuracies:
@@ -131,10 +134,166 @@ def _binding_of(reason: str) -> str:
     return "solver"
 
 
+#: The smallest relative step down of the confirming search of :func:`tradeoff_optimal`.
+CONFIRM_TOLERANCE = 2e-3
+#: Trial rates of the confirming search at most, per accuracy.
+CONFIRM_TRIALS = 6
+
+
+@dataclass
+class _Trial:
+    """A design at one rate and its full simulation: ``excess`` > 0 fails (max of error/accuracy and
+    torque command/limit, minus 1; inf when the design has no solution)."""
+
+    spm: float
+    excess: float
+    reason: str = ""
+    design: object = None
+    result: object = None
+
+    @property
+    def ok(self) -> bool:
+        return self.excess <= 0.0
+
+
+def _confirm(problem, design, spm: float, acc: float) -> _Trial:
+    """The full servo simulation of ``design``'s stroke at its rate: does it meet ``acc`` within the torque limit?"""
+    res = handover_accuracy(problem, design.stroke, spm)
+    excess = max(res.handover_error / acc, res.peak_torque_command / res.torque_limit) - 1.0
+    reason = ""
+    if res.torque_limited:
+        reason = (f"torque limit: the servo's torque command reaches {res.peak_torque_command:.2f} N m, "
+                  f"limit {res.torque_limit:.2f} N m")
+    elif res.handover_error > acc:
+        reason = f"handover accuracy: the full simulation of the design gives {res.handover_error * 1e3:.4f} mm"
+    return _Trial(spm, excess, reason, design, res)
+
+
 def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowest: float = 100.0,
                      start: float | None = None, progress=None) -> list[TradeoffPoint]:
-    """Highest stitch rate with the optimal stroke (``design.solve_design`` with the handover
-    accuracy constraint, which includes :func:`.kernel.servo_handover_error`) for each accuracy [m].
+    """Highest stitch rate with the optimal stroke for each accuracy [m], by ``min_time`` continuation.
+
+    For each accuracy, loosest first: one ``min_time`` design solve (the highest rate within every
+    design limit and the design's handover error term, :class:`.kernel.ServoErrorTerm`), warm-started
+    from the previous accuracy's; then its full simulation (:func:`handover_accuracy`: table
+    sampling, load forces, the handover window, the torque command). A rate counts only when the
+    full simulation meets the accuracy without the torque command passing its limit: the design's
+    own term sees the end of the move with a continuous reference only. When the simulation rejects
+    the ``min_time`` design, the rate is searched below it (it bounds every design's rate) with the
+    design of the file's objective at fixed rates, each confirmed the same way (a step down by the
+    simulation's excess; a safeguarded secant to half the resolution). A tighter accuracy never gets a higher rate
+    than a looser one. The motor and pulley are the problem's (``drive.motor``, ``pulley_teeth``),
+    as for the classic law, so the two curves compare strokes on one drive. ``progress(step, text)``
+    is called once per step (a line per solve or simulation).
+    """
+    from ..design.settings import DesignSettings
+    from ..design.solve import solve_design
+
+    accuracies = sorted(a * 1e-3 for a in DEFAULT_ACCURACIES_MM) if accuracies is None else sorted(accuracies)
+    base = problem.design or DesignSettings()
+    say = progress or (lambda step, text: None)
+    spm0 = problem.spm if start is None else start
+    warm, ceiling, points = None, None, {}
+    for acc in sorted(accuracies, reverse=True):
+        # the same drive as the classic law: the problem's motor and pulley
+        settings = replace(base, accuracy=acc, motor_choice="fixed", pulley="fixed")
+        tag = f"optimal {acc * 1e3:g} mm"
+        if ceiling is not None and ceiling <= 0.0:
+            points[acc] = TradeoffPoint(acc, "optimal", None, "handover_accuracy", None,
+                                        "a looser accuracy has no confirmed rate")
+            continue
+        try:
+            d = solve_design(problem, objective="min_time", spm=spm0, settings=settings, warm_start=warm)
+        except SolverError as exc:
+            say(tag, f"min_time: no design ({exc.reason.splitlines()[0]})")
+            points[acc] = TradeoffPoint(acc, "optimal", None, _binding_of(exc.reason), None, exc.reason)
+            continue
+        warm, spm0 = d, d.spm
+        top = d.spm if ceiling is None else min(d.spm, ceiling)
+        binding = _binding_of(d.notes[0].split("bound by:", 1)[-1])
+        say(tag, f"min_time {d.spm:.1f} spm ({binding}); full simulation")
+        hi = _confirm(problem, d, top, acc) if top == d.spm else _Trial(top, math.inf)
+        if top != d.spm:  # the looser accuracy's rate bounds this one: the min_time design runs there too
+            from ..design.result import stroke_from_solutions
+
+            d_top = replace(d, spm=top, stroke=stroke_from_solutions(problem, top, d.solutions, d.stroke.label))
+            hi = _confirm(problem, d_top, top, acc)
+        if hi.ok:
+            found, lo = top, hi
+        else:
+            lo = _search_below(problem, hi, settings, acc, resolution, lowest, warm, lambda text: say(tag, text))
+            found = None if lo is None else lo.spm
+            binding = _binding_of(hi.reason)
+        if found is None:
+            points[acc] = TradeoffPoint(acc, "optimal", None, binding, None, hi.reason)
+            ceiling = 0.0
+            continue
+        max_spm = math.floor(found / resolution + 1e-9) * resolution
+        error = lo.result.handover_error
+        detail = (f"min_time {d.spm:.1f} spm; at {found:.1f} spm the full simulation gives {error * 1e3:.4f} mm"
+                  + ("" if hi.ok else f"; above: {hi.reason}"))
+        points[acc] = TradeoffPoint(acc, "optimal", max_spm, binding, error, detail)
+        ceiling = found
+        say(tag, f"{found:.1f} spm confirmed ({error * 1e3:.4f} mm)")
+    return [points[a] for a in accuracies]
+
+
+def _search_below(problem, hi: _Trial, settings, acc: float, resolution: float, lowest: float, warm, say):
+    """The highest rate below the rejected ``hi`` whose design (the file's objective at that rate) the full
+    simulation confirms: a step down by the simulation's excess (torque and error grow about with the
+    square of the rate), then a secant through the latest two trials, kept inside the bracket of the
+    confirmed and the rejected rate (else its middle), until the bracket is half the resolution."""
+    from ..design.solve import solve_design
+
+    def trial(spm: float) -> _Trial:
+        nonlocal warm
+        try:
+            d = solve_design(problem, spm=spm, settings=settings, warm_start=warm)
+        except SolverError as exc:
+            say(f"{spm:.1f} spm: no design ({exc.reason.splitlines()[0]})")
+            return _Trial(spm, math.inf, exc.reason)
+        warm = d
+        t = _confirm(problem, d, spm, acc)
+        say(f"{spm:.1f} spm: " + ("confirmed" if t.ok else t.reason))
+        return t
+
+    def step_down(t: _Trial) -> float:
+        factor = 1.0 / math.sqrt(1.0 + t.excess) if math.isfinite(t.excess) else 1 / 1.25
+        return t.spm * min(factor, 1.0 - CONFIRM_TOLERANCE)
+
+    lo, trials = None, 0
+    x = step_down(hi)
+    while lo is None:
+        if x < lowest or trials >= CONFIRM_TRIALS:
+            return None
+        t, trials = trial(x), trials + 1
+        if t.ok:
+            lo = t
+        else:
+            hi, x = t, step_down(t)
+    last = [hi, lo]  # the two latest finite trials: a secant through them, kept inside the bracket
+    while hi.spm - lo.spm > resolution / 2 and trials < CONFIRM_TRIALS:
+        a, b = last[-2], last[-1]
+        mid = 0.5 * (lo.spm + hi.spm)
+        x = (b.spm - b.excess * (b.spm - a.spm) / (b.excess - a.excess)
+             if math.isfinite(a.excess) and b.excess != a.excess else mid)
+        if not lo.spm + resolution / 4 <= x <= hi.spm - resolution / 4:
+            x = mid
+        t, trials = trial(x), trials + 1
+        if t.ok:
+            lo = t
+        else:
+            hi = t
+        if math.isfinite(t.excess):
+            last.append(t)
+    return lo
+
+
+def tradeoff_optimal_bisection(problem, accuracies=None, *, resolution: float = 10.0, lowest: float = 100.0,
+                     start: float | None = None, progress=None) -> list[TradeoffPoint]:
+    """Highest stitch rate with the optimal stroke by bisection (the reference of
+    :func:`tradeoff_optimal`, kept for the tests): ``design.solve_design`` with the handover
+    accuracy constraint, which includes :class:`.kernel.ServoErrorTerm`, for each accuracy [m].
 
     Bisection on the rate, one design solve per trial (warm-started). A rate
     counts only when the design solves *and* its full simulation
@@ -155,8 +314,9 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
     points = []
     lo_known = None
     warm = None
-    it = progress(accuracies) if progress else accuracies
-    for acc in it:
+    for acc in accuracies:
+        if progress:
+            progress(f"optimal {acc * 1e3:g} mm", "bisection")
         # the same drive as the classic law: the problem's motor and pulley
         settings = replace(base, accuracy=acc, motor_choice="fixed", pulley="fixed")
         reasons: dict = {}
@@ -212,7 +372,8 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
 def tradeoff(problem, accuracies=None, *, strokes: str = "both", resolution: float = 10.0, step: float = 50.0,
              progress=None) -> dict:
     """The report of ``strokeopt tradeoff``: for each required handover accuracy the highest
-    stitch rate with the problem's classic law and with the optimal stroke, and the binding limit."""
+    stitch rate with the problem's classic law and with the optimal stroke, and the binding limit.
+    ``progress(step, text)``: called with a line at every step (a simulated rate, a design solve)."""
     if strokes not in ("both", "classic", "optimal"):
         raise ProblemError("--strokes", "", f"{strokes!r} is not one of both, classic, optimal")
     points = []

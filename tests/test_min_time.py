@@ -1,0 +1,108 @@
+"""The min_time objective: the highest stitch rate as one NLP with the cycle time free (issue 14, item 1)."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from strokeopt import load_problem
+from strokeopt.cli.main import main
+from strokeopt.design.solve import solve_design
+from strokeopt.errors import SolverError
+
+ROOT = Path(__file__).resolve().parents[1]
+KNOWN = ROOT / "problems" / "known_optima"
+
+
+def test_min_time_known_optimum_is_the_parabolic_closed_form():
+    # DESIGN.md known optimum: the shortest rest-to-rest move under |a| <= a_max is the parabolic law,
+    # C_a = 4, T_min = sqrt(4 h / a_max); here a_max = 200 % of the 055U2B30's rated 1.2 N m (thesis
+    # Tab. 4.5: J = 0.23 kg cm^2) over the pure inertia J/r + m r of the file (28 teeth, m = 0.2 kg)
+    design = solve_design(load_problem(KNOWN / "min_time.toml"))
+    r = 28 * 3e-3 / math.pi / 2
+    a_max = 2.4 / (0.23e-4 / r + 0.2 * r)
+    t_move = math.sqrt(4 * 0.010 / a_max)
+    assert design.status == "optimal"
+    for move in design.moves:
+        assert move.C_a == pytest.approx(4.0, rel=0.005)
+        assert move.duration == pytest.approx(t_move, rel=0.005)
+    # each move is 18 deg of a 360 deg cam cycle, one cam revolution per stitch: stitch period 20 T_min
+    assert design.objective_value == pytest.approx(20 * t_move, rel=0.005)
+    assert design.objective_unit == "s"
+    assert design.spm == pytest.approx(60 / (20 * t_move), rel=0.005)
+    # the binding limit is named: the peak torque of both moves, nothing else
+    assert "bound by: peak torque move 1; peak torque move 2;" in design.notes[0]
+    assert design.check_value("peak_torque") == pytest.approx(2.4, rel=0.005)
+    assert design.check_value("rms_torque") < 0.9 * 1.2
+
+
+def test_min_time_settles_from_any_start_rate():
+    problem = load_problem(KNOWN / "min_time.toml")
+    slow, fast = (solve_design(problem, spm=spm) for spm in (100.0, 1000.0))
+    assert slow.spm == pytest.approx(fast.spm, rel=2e-3)
+
+
+def test_min_time_needs_a_drive():
+    from strokeopt.errors import ProblemError
+
+    with pytest.raises(ProblemError, match="needs the drive"):
+        solve_design(load_problem(KNOWN / "min_peak_accel.toml"), objective="min_time")
+
+
+def test_min_time_reference_drive_is_the_feasibility_boundary(reference):
+    # the thesis drive (055U2B30, 28 teeth) at 0.5 mm: the min_time rate is feasible for the fixed-rate
+    # design (file's objective), and 1 % above it no design meets the limits
+    settings = replace(reference.design, motor_choice="fixed", pulley="fixed")
+    fast = solve_design(reference, objective="min_time", settings=settings)
+    assert 850 < fast.spm < 1000
+    assert "peak torque move 1" in fast.notes[0] and "RMS torque" in fast.notes[0]
+    at = solve_design(reference, spm=fast.spm * (1 - 1e-3), settings=settings, warm_start=fast)
+    assert at.status in ("optimal", "acceptable")
+    with pytest.raises(SolverError):
+        solve_design(reference, spm=fast.spm * 1.01, settings=settings, warm_start=fast)
+
+
+#: `strokeopt solve problems/deco2000_needle_bar.toml --spm 400:1000:10 --json` (catalogue search,
+#: 0.5 mm), computed once for issue 14 (10 min): fastest_feasible_spm 960; at 970 "no motor of the
+#: catalogue can drive this design; closest CMP50M3000: belt_width needs 1.672, limit 1.66". The sweep's
+#: catalogue search drops a motor whose continuous-radius solve fails (its belt check takes the fewest
+#: teeth): at 975 spm CMP50M3000 with 42 teeth is feasible (strokeopt solve --spm 975 with that drive
+#: fixed), so the sweep's 960 is a feasible rate, not the highest.
+SWEEP_FASTEST_FEASIBLE_SPM = 960.0
+
+
+@pytest.mark.slow
+def test_min_time_catalogue_rate_bracketed(reference):
+    fast = solve_design(reference, objective="min_time")
+    assert fast.spm >= SWEEP_FASTEST_FEASIBLE_SPM * 0.99  # every feasible rate of the sweep is feasible here
+    fixed = replace(reference.design, motor_choice="fixed", pulley="fixed")
+    parts = load_problem(reference.file, [f'drive.motor="{fast.motor}"', f"transmission.pulley_teeth={fast.pulley_teeth}"])
+    solve_design(parts, spm=fast.spm * (1 - 1e-3), settings=fixed, warm_start=fast)
+    with pytest.raises(SolverError):
+        solve_design(parts, spm=fast.spm * 1.01, settings=fixed, warm_start=fast)
+
+
+def test_cli_solve_min_time_json(capsys):
+    assert main(["solve", str(KNOWN / "min_time.toml"), "--objective", "min_time", "--json", "--plot", "none"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["objective"] == "min_time" and out["objective_unit"] == "s"
+    assert out["spm"] == pytest.approx(60 / out["objective_value"], rel=1e-9)
+    assert out["notes"][0].startswith("highest stitch rate")
+
+
+#: Today's bisection (issue 14): optimal stroke 520/850/900/910 spm at 0.05/0.1/0.2/>=0.3 mm (rates
+#: rounded down to 10 spm from a 10-spm bracket, so each may sit up to 20 spm below the boundary).
+@pytest.mark.slow
+def test_tradeoff_min_time_agrees_with_the_bisection(reference):
+    from strokeopt.servo.tradeoff import tradeoff_optimal, tradeoff_optimal_bisection
+
+    lines = []
+    (new,) = tradeoff_optimal(reference, [0.5e-3], resolution=2, progress=lambda step, text: lines.append(text))
+    (old,) = tradeoff_optimal_bisection(reference, [0.5e-3], resolution=2, start=800)
+    assert new.max_spm == pytest.approx(old.max_spm, rel=0.01)
+    assert new.handover_error <= 0.5e-3 and new.binding == old.binding == "torque_limit"
+    assert lines[0].startswith("min_time") and lines[-1].endswith("mm)")
