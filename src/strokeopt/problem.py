@@ -46,6 +46,9 @@ class Problem:
     drive: DriveSpec | None = field(default=None, repr=False)  # [drive]: motor, load, limits (drive/spec.py)
     design: DesignSettings | None = field(default=None, repr=False)  # [design]: optimal stroke (design/settings.py)
     servo: "ServoSettings | None" = field(default=None, repr=False)  # [servo]: servo loop and belt (servo/settings.py)
+    #: the ``--set`` texts applied to the file (a design records them, so every command that reads it
+    #: sees the same problem)
+    overrides: tuple = field(default=(), repr=False)
     #: the terms of the handover position error the design holds (design.request.ErrorTerm; the
     #: problem file gives the servo's term with a [servo] section)
     error_terms: tuple = field(default=(), repr=False)

@@ -59,7 +59,21 @@ def apply_drive_options(args, fix_in_design: bool = False) -> None:
         if spm is not None and abs(_spm_value(spm) - float(data["spm"])) > 1e-9:
             raise ProblemError(design, "spm", f"the design was solved at {data['spm']:g} spm, not at {spm} "
                                               "spm: omit --spm or solve the design at that rate")
+        if "machine.spm" in forced and forced["machine.spm"][1] != float(data["spm"]):
+            raise ProblemError(design, "spm", f"the design was solved at {data['spm']:g} spm, but --set "
+                                              f"{forced['machine.spm'][0]} asks for another: omit the --set")
         args.spm = repr(float(data["spm"]))
+        from ..io.design_file import design_overrides
+
+        for text in design_overrides(data):  # the --set texts the design was solved with hold here too
+            key, value = parse_override(text)
+            path = ".".join(str(k) for k in key)
+            if path in forced and forced[path][1] != value:
+                raise ProblemError(design, "overrides", f"the design was solved with --set {text}, but --set "
+                                                        f"{forced[path][0]} asks for another: omit the --set or "
+                                                        "solve the design for it")
+            if path not in forced:
+                args.overrides.insert(0, text)
         for name, (path, _) in DRIVE_FIELDS.items():
             value = data.get(name)
             if value is None:

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..io.design_file import read_design
+from ..io.design_file import design_overrides, read_design
 from ..errors import ProblemError
 from ..io.problem_file import load_problem
 from .simulate import SceneResult, SimulationOptions, simulate_scene
@@ -43,7 +43,7 @@ def load_design(path, problem_file=None, overrides=()) -> DesignStroke:
     """
     data, stroke = read_design(path)
     file = design_problem_file(path, data, problem_file)
-    problem = load_problem(file, list(overrides) + [f"machine.spm={float(data['spm'])!r}"])
+    problem = load_problem(file, [*design_overrides(data), *overrides, f"machine.spm={float(data['spm'])!r}"])
     return DesignStroke(problem, stroke, problem.spm, str(path), data.get("objective"))
 
 
@@ -60,6 +60,8 @@ def design_problem_file(path, data: dict, problem_file=None) -> Path:
 
 
 def verify(design, scene: str, options: SimulationOptions | None = None) -> SceneResult:
-    """Re-simulate ``design`` (a solve's ``Design`` or a :class:`DesignStroke`): its stroke, at its
-    stitch rate, through ``scene`` of its problem's contact model."""
+    """Re-simulate ``design`` (a solve's ``Design``, a :class:`DesignStroke`, or the path of a design.json):
+    its stroke, at its stitch rate, through ``scene`` of its problem's contact model."""
+    if isinstance(design, (str, Path)):
+        design = load_design(design)
     return simulate_scene(design.problem, scene, design.spm, stroke=design.stroke, options=options)

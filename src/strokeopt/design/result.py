@@ -99,6 +99,7 @@ class Design:
             "status": self.status,
             "problem": self.problem.name,
             "problem_file": str(Path(self.problem.file).resolve()),
+            "overrides": list(getattr(self.problem, "overrides", ())),  # the --set texts it was solved with
             "objective": self.objective,
             "objective_value": self.objective_value,
             "objective_unit": self.objective_unit,

@@ -148,6 +148,15 @@ def validate_design(data: dict, file: str) -> None:
     top.number("cycle_time_s", positive=True, max=3600.0)
     if data.get("pulley_teeth") is not None:
         top.number("pulley_teeth", integer=True, min=1, max=10**4)
+    overrides = data.get("overrides", [])
+    if not isinstance(overrides, list) or not all(isinstance(o, str) and "=" in o for o in overrides):
+        raise top.error("overrides", "must be a list of the --set texts ('key.path=value') the design was solved "
+                                     "with: the design file is damaged")
+
+
+def design_overrides(data: dict) -> list[str]:
+    """The ``--set`` texts a design was solved with, less its stitch rate (the design's own ``spm`` rules)."""
+    return [o for o in data.get("overrides", []) if o.split("=", 1)[0].strip() != "machine.spm"]
 
 
 def _finite_array(f: Fields, key: str, shape: tuple[int, ...]) -> None:

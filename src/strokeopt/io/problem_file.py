@@ -9,6 +9,7 @@ through :class:`~strokeopt.io.fields.Fields`.
 from __future__ import annotations
 
 import tomllib
+from dataclasses import replace
 from pathlib import Path
 
 from ..contact.model import parse_model
@@ -26,7 +27,7 @@ from .fields import _REQUIRED, Fields, apply_overrides
 
 
 def load_problem(path: str | Path, overrides: list[str] | None = None) -> Problem:
-    """Read, override and validate a problem file."""
+    """Read, override and validate a problem file; ``overrides`` are ``--set`` texts (``"machine.spm=600"``)."""
     path = Path(path)
     file = str(path)
     try:
@@ -39,8 +40,11 @@ def load_problem(path: str | Path, overrides: list[str] | None = None) -> Proble
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ProblemError(file, "", f"is not valid TOML: {exc}") from None
-    overridden = apply_overrides(data, list(overrides or []), file)
-    return parse_problem(data, file, overridden, path)
+    if isinstance(overrides, str):  # one override given as a string, not as a list of them
+        overrides = [overrides]
+    overrides = list(overrides or [])
+    overridden = apply_overrides(data, overrides, file)
+    return replace(parse_problem(data, file, overridden, path), overrides=tuple(overrides))
 
 
 def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), path: Path | None = None) -> Problem:

@@ -1,0 +1,57 @@
+"""A design remembers the problem it was solved for: its --set overrides travel with design.json."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from strokeopt import load_problem, verify
+from strokeopt.cli.main import main
+
+K2 = "model.springs.k2.stiffness_N_m=1240"
+
+
+@pytest.fixture(scope="module")
+def design_dir(tmp_path_factory, reference_path):
+    out = tmp_path_factory.mktemp("design")
+    code = main(["solve", str(reference_path), "--spm", "550", "--motor", "055U2B30", "--pulley-teeth", "28",
+                 "--set", K2, "--out", str(out), "--json", "--plot", "none"])
+    assert code == 0
+    return out
+
+
+def test_design_file_records_the_overrides(design_dir):
+    data = json.loads((design_dir / "design.json").read_text())
+    assert K2 in data["overrides"]
+
+
+def test_verify_uses_the_design_overrides(design_dir, reference_path, capsys):
+    capsys.readouterr()
+    assert main(["verify", str(reference_path), "--design", str(design_dir / "design.json"), "--json",
+                 "--plot", "none"]) in (0, 1)
+    with_design = json.loads(capsys.readouterr().out)["impact_velocity_m_s"]
+    assert main(["verify", str(design_dir / "design.json"), "--json", "--plot", "none"]) in (0, 1)
+    positional = json.loads(capsys.readouterr().out)["impact_velocity_m_s"]
+    # the library path gives the same number, and it is the stiffer spring's (not the file's 900 N/m)
+    lib = verify(str(design_dir / "design.json"), "release").metrics["impact_velocity_m_s"]
+    stock = load_problem(reference_path, ["machine.spm=550"])
+    from strokeopt.io.design_file import read_design
+
+    _, stroke = read_design(design_dir / "design.json")
+    from strokeopt import simulate_scene
+
+    soft = simulate_scene(stock, "release", 550, stroke=stroke).metrics["impact_velocity_m_s"]
+    assert with_design == pytest.approx(positional, rel=1e-9) == pytest.approx(lib, rel=1e-9)
+    assert abs(with_design - soft) > 0.05  # the override changes the answer: it must not be lost
+
+
+@pytest.mark.parametrize("extra", [["--set", "model.springs.k2.stiffness_N_m=900"], ["--set", "machine.spm=700"]])
+def test_a_set_against_the_design_is_an_error(design_dir, reference_path, extra, capsys):
+    code = main(["verify", str(reference_path), "--design", str(design_dir / "design.json"), *extra, "--plot", "none"])
+    err = capsys.readouterr().err
+    assert code == 2 and "design" in err and err.count("\n") == 1
+
+
+def test_load_problem_takes_one_override_as_a_string(reference_path):
+    assert load_problem(reference_path, "machine.spm=600").spm == 600.0
