@@ -4,6 +4,7 @@ contact force is, and they end with an exit code and a JSON status that say the 
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pytest
 
@@ -205,3 +206,18 @@ def test_verbose_only_where_something_is_printed(capsys, command, has_verbose):
     with pytest.raises(SystemExit):
         main([command, "--help"])
     assert ("--verbose" in capsys.readouterr().out) == has_verbose
+
+
+@pytest.mark.parametrize("argv, code, status", [
+    (["solve", "problems/deco2000_needle_bar.toml", "--spm", "2000", "--motor", "055U2B30", "--pulley-teeth", "28"],
+     1, "failed"),
+    (["kinematics", "problems/deco2000_needle_bar.toml", "--set", "drive.moving_mass_kg=-1"], 2, "bad input"),
+])
+def test_a_failure_with_json_still_prints_a_json_status(argv, code, status, capsys):
+    # a script reading --json gets a report on every exit, not an empty stdout
+    root = Path(__file__).resolve().parents[1]
+    argv = [str(root / a) if a.startswith("problems/") else a for a in argv]
+    assert main([*argv, "--json", "--plot", "none"]) == code
+    out, err = capsys.readouterr()
+    data = json.loads(out)
+    assert data["status"] == status and data["message"] and data["message"] in err

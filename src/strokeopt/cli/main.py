@@ -12,7 +12,8 @@ import sys
 from pathlib import Path
 
 from ..errors import ProblemError, SolverError, StrokeoptError
-from .common import check_outputs, logs_to_stderr
+from ..io.plain import to_json
+from .common import _emit, check_outputs, logs_to_stderr
 from .parser import build_parser
 
 
@@ -31,6 +32,14 @@ def _check_plot_format(args) -> None:
 
 
 
+def _fail(args, word: str, status: str, exc: Exception, code: int) -> int:
+    """One line on stderr; with --json also the JSON report a script reads (its status and the message)."""
+    print(f"strokeopt: {word}: {exc}", file=sys.stderr)
+    if getattr(args, "json", False):
+        _emit(to_json({"status": status, "message": str(exc)}))
+    return code
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -42,14 +51,11 @@ def main(argv: list[str] | None = None) -> int:
                 return args.run(args)
         return args.run(args)
     except ProblemError as exc:
-        print(f"strokeopt: error: {exc}", file=sys.stderr)
-        return 2
+        return _fail(args, "error", "bad input", exc, 2)
     except SolverError as exc:
-        print(f"strokeopt: failed: {exc}", file=sys.stderr)
-        return 1
+        return _fail(args, "failed", "failed", exc, 1)
     except StrokeoptError as exc:
-        print(f"strokeopt: error: {exc}", file=sys.stderr)
-        return 2
+        return _fail(args, "error", "bad input", exc, 2)
     except KeyboardInterrupt:
         print("strokeopt: interrupted", file=sys.stderr)
         return 130

@@ -73,7 +73,8 @@ def build_parser() -> argparse.ArgumentParser:
                "Every --json report has a 'status': 'ok'; 'optimal' or 'acceptable' (solve: IPOPT's verdict); "
                "'infeasible' (size, a solve sweep: no candidate or rate passes); 'limits exceeded' (solve, accuracy: "
                "a limit is broken, exit 1); 'verification failed' (verify: premature needle release, exit 1); "
-               "'targets missed' (bench).",
+               "'targets missed' (bench); 'failed' (a solve or an integration that did not succeed, exit 1) and "
+               "'bad input' (exit 2), each with the 'message' stderr shows.",
     )
     from .. import __version__
 

@@ -83,8 +83,9 @@ def fine_cycle(problem, spm: float, moves: list[Move], sols: list[MoveSolution],
 
 
 def drive_checks_fine(drive: DriveSetup, motor, teeth: int | None, radius: float, problem, spm, moves, sols,
-                       per_interval: int) -> list:
-    """the drive package's checks of the solution, on a fine grid over the whole cycle."""
+                       per_interval: int, belt_teeth: int | None = None) -> list:
+    """The drive package's checks of the solution, on a fine grid over the whole cycle. A continuous radius
+    has its belt rated as ``belt_teeth`` teeth (None: the fewest of the range)."""
     from ..drive.checks import drive_checks
 
     switches = switch_positions(drive)
@@ -93,5 +94,5 @@ def drive_checks_fine(drive: DriveSetup, motor, teeth: int | None, radius: float
         trans = drive.transmission(teeth)
     else:
         trans = BeltPulley(2 * radius, inertia=float(drive.pulley_inertia(2 * radius)))
-    grooves = teeth if teeth is not None else drive.teeth_range[0]
+    grooves = teeth if teeth is not None else (belt_teeth or drive.teeth_range[0])
     return drive_checks(motor, trans, drive.load, t, s, v, a, limits=drive.limits, belt=drive.belt, grooves=grooves)

@@ -160,12 +160,12 @@ class BeltTension(Limit):
 
     def on_cycle(self, g):
         dm, req = g.drive_model, g.request
-        belt = req.drive.belt_limit(req.choice.teeth)
+        belt = req.drive.belt_limit(req.choice.belt_grooves)
         if belt is None:
             return
         # the tension the belt checks allow; said in the units of the check that binds (the drive package's names)
         check, f_allow, belt_lim, belt_unit = belt
-        f_lim = g.built.param("belt force limit", lambda r: r.drive.belt_limit(r.choice.teeth)[1])
+        f_lim = g.built.param("belt force limit", lambda r: r.drive.belt_limit(r.choice.belt_grooves)[1])
         allf = ca.horzcat(*[ca.reshape(f, 1, -1) for f in dm.forces]) / f_lim
         dm.pin_values += [f / f_lim for f in dm.pin_forces]
         what = {"belt_width": "belt_width (width factor the belt tension requires)",

@@ -52,8 +52,11 @@ def choose_parts(req: SolveRequest, progress=None):
                 out = solve_one(replace(req, choice=DriveChoice(motor, problem.pulley_teeth), warm=warm,
                                         radius0=None))
             else:
-                out = solve_one(replace(req, choice=DriveChoice(motor, None, drive.radius_bounds()), warm=warm,
-                                        radius0=radius0))
+                # with tooth counts to follow ("optimise"), the belt of the continuous radius is rated as the
+                # largest pulley's: a relaxation, so a motor is not dropped for a rating its pulleys beat
+                belt_teeth = drive.teeth_range[1] if settings.pulley == "optimise" else None
+                out = solve_one(replace(req, choice=DriveChoice(motor, None, drive.radius_bounds(),
+                                                                belt_teeth=belt_teeth), warm=warm, radius0=radius0))
                 radius0 = out.radius
             warm = out.sols
             first_pass.append((out, motor))

@@ -183,7 +183,7 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
                 pick = nlp.value(nlp.graph.pick, x).ravel()
                 motor = choice.candidates[int(np.argmax(pick))]
             checks = drive_checks_fine(drive, motor, choice.teeth, radius, req.problem, rated.spm, rated.moves,
-                                       sols, settings.check_points)
+                                       sols, settings.check_points, choice.belt_teeth)
             over = [max(0.0, -c.margin) for c in checks if c.name in ENFORCED_CHECKS and math.isfinite(c.margin)]
             if req.objective == "min_peak_torque":  # the epigraph held at the nodes; the fine grid reads the peak
                 nlp_peak = nlp.graph.transform(objective_value(nlp, sol, x), nlp.request)

@@ -96,6 +96,15 @@ class DriveChoice:
     teeth: int | None = None
     radius_bounds: tuple[float, float] | None = None
     candidates: tuple = ()  # motors for the Bonmin choice
+    #: with a continuous radius, the tooth count whose belt rating the belt is checked with; None: the
+    #: fewest of the range (conservative). The catalogue search's first pass takes the most (a
+    #: relaxation: its radius only guides the tooth counts, each checked with its own rating).
+    belt_teeth: int | None = None
+
+    @property
+    def belt_grooves(self) -> int | None:
+        """The tooth count the belt checks use: the pulley's, else :attr:`belt_teeth`."""
+        return self.teeth if self.teeth is not None else self.belt_teeth
 
     @property
     def label(self) -> str:
