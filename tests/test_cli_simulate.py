@@ -171,3 +171,11 @@ def test_speed_sweep_names_the_onset_of_premature_release(capsys, reference_path
     assert data["premature_release_onset_spm"] == first
     assert main(["simulate", str(reference_path), "--scene", "release", "--spm", "1100:1160:20", "--plot", "none"]) == 0
     assert f"premature release from {first:g} spm" in capsys.readouterr().out
+
+
+def test_a_misspelt_scene_gets_a_hint(reference_path, capsys):
+    from strokeopt.cli.main import main as run
+
+    assert run(["simulate", str(reference_path), "--scene", "relase", "--plot", "none"]) == 2
+    err = capsys.readouterr().err
+    assert "did you mean 'release'" in err and err.count("\n") == 1

@@ -177,7 +177,10 @@ def _scene_name(args, problem) -> str:
         raise ProblemError(str(problem.file), "scenes", "the problem defines no [scenes.*] (and [model]) to simulate")
     name = args.scene or ("release" if "release" in problem.scenes else next(iter(problem.scenes)))
     if name not in problem.scenes:
-        raise ProblemError(str(problem.file), "--scene", f"no scene {name!r}; the problem has: {', '.join(problem.scenes)}")
+        from ..io.fields import did_you_mean
+
+        raise ProblemError(str(problem.file), "--scene", f"no scene {name!r}{did_you_mean(name, problem.scenes)}; "
+                                                         f"the problem has: {', '.join(problem.scenes)}")
     return name
 
 

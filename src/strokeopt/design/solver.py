@@ -16,7 +16,7 @@ import numpy as np
 import casadi as ca
 
 from .._stdout import stdout_to
-from ..io.fields import _did_you_mean
+from ..io.fields import did_you_mean
 
 #: Default IPOPT options (plain dict, passed through to CasADi's nlpsol).
 DEFAULT_SOLVER_OPTIONS = {
@@ -59,7 +59,7 @@ def check_solver_options(options: dict) -> tuple[str, str] | None:
         message, log = reason
         name = key.split(".", 1)[1] if key.startswith("ipopt.") else key
         if "Unknown option" in message or "No such IPOPT option" in message:
-            return key, (f"unknown solver option{_did_you_mean(key, _option_names(plugin))} (CasADi's nlpsol "
+            return key, (f"unknown solver option{did_you_mean(key, _option_names(plugin))} (CasADi's nlpsol "
                          f"options, or 'ipopt.NAME' for an IPOPT option)")
         illegal = re.search(r"Illegal type for \w+: (.*)", message)
         if illegal:

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ProblemError
-from ..io.fields import Fields, _did_you_mean
+from ..io.fields import Fields, did_you_mean
 from .transmission import PROFILE_PITCH, TEETH_RANGE, BeltPulley, pitch_diameter
 
 RPM = 2 * math.pi / 60  # rad/s per rpm
@@ -183,13 +183,13 @@ class Catalogue:
     def motor(self, name: str, where: tuple[str, str] = ("--motor", "")) -> ServoMotor:
         """The motor called ``name``; an unknown name is a :class:`ProblemError` at ``where``."""
         if name not in self.motors:
-            raise ProblemError(where[0], where[1], f"unknown motor {name!r}{_did_you_mean(name, self.motors)}; "
+            raise ProblemError(where[0], where[1], f"unknown motor {name!r}{did_you_mean(name, self.motors)}; "
                                                    f"the catalogue has {', '.join(self.motors)}")
         return self.motors[name]
 
     def belt(self, name: str, where: tuple[str, str] = ("--belt", "")) -> Belt:
         if name not in self.belts:
-            raise ProblemError(where[0], where[1], f"unknown belt {name!r}{_did_you_mean(name, self.belts)}; "
+            raise ProblemError(where[0], where[1], f"unknown belt {name!r}{did_you_mean(name, self.belts)}; "
                                                    f"the catalogue has {', '.join(self.belts)}")
         return self.belts[name]
 

@@ -90,7 +90,7 @@ class Fields:
         if not isinstance(value, str):
             raise self.error(key, f"must be a string, got {_kind(value)} {value!r}")
         if choices is not None and value not in choices:
-            raise self.error(key, f"{value!r} is not one of {', '.join(choices)}{_did_you_mean(value, choices)}")
+            raise self.error(key, f"{value!r} is not one of {', '.join(choices)}{did_you_mean(value, choices)}")
         return value
 
     def boolean(self, key: str, default: Any = _REQUIRED) -> bool:
@@ -118,7 +118,7 @@ class Fields:
         for key in self.data:
             if key not in self._read:
                 known = sorted(self._read)
-                raise self.error(key, f"unknown field{_did_you_mean(key, known)}; known here: {', '.join(known) or 'none'}")
+                raise self.error(key, f"unknown field{did_you_mean(key, known)}; known here: {', '.join(known) or 'none'}")
 
 
 def _range_text(lo: float | None, hi: float | None, positive: bool = False) -> str:
@@ -139,7 +139,7 @@ def _kind(value: Any) -> str:
             float: "a number"}.get(type(value), type(value).__name__)
 
 
-def _did_you_mean(word: str, options) -> str:
+def did_you_mean(word: str, options) -> str:
     close = difflib.get_close_matches(word, list(options), n=1)
     return f" (did you mean {close[0]!r}?)" if close else ""
 
@@ -190,7 +190,7 @@ def apply_overrides(data: dict, overrides: list[str], file: str) -> frozenset:
             else:
                 if not isinstance(node, dict) or seg not in node:
                     raise ProblemError(file, where, f"--set {text}: no such field in the problem"
-                                       f"{_did_you_mean(seg, node) if isinstance(node, dict) else ''}")
+                                       f"{did_you_mean(seg, node) if isinstance(node, dict) else ''}")
                 node = node[seg]
         last = path[-1]
         if isinstance(last, int) or not isinstance(node, dict):
