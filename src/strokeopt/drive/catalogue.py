@@ -262,17 +262,11 @@ def load_catalogue(extra_files=(), builtin: bool = True) -> Catalogue:
             row.finish()
             cat.motors[name] = motor
 
-        models = top.table("inertia_model", required=False)
-        if models is not None:
-            for profile in list(models.data):
-                m = models.table(profile)
-                if profile not in PROFILE_PITCH:
-                    raise m.error("", f"unknown pulley profile {profile!r}; known: {', '.join(PROFILE_PITCH)}")
-                m.string("kind", "power_law", choices=("power_law",))
-                src = m.string("source", "")
-                m.finish()
-                cat.inertia_models[profile] = PulleyInertiaModel(profile, 0.0, 0.0, 0.0, src)  # fitted below
-            models.finish()
+        for profile, m in _profile_tables(top, "inertia_model", "pulley"):
+            m.string("kind", "power_law", choices=("power_law",))
+            src = m.string("source", "")
+            m.finish()
+            cat.inertia_models[profile] = PulleyInertiaModel(profile, 0.0, 0.0, 0.0, src)  # fitted below
 
         for row in top.tables("pulley", required=False):
             name = unique("pulley", row)
@@ -286,24 +280,18 @@ def load_catalogue(extra_files=(), builtin: bool = True) -> Catalogue:
                 pending.append((row, name, profile, teeth))
             row.finish()
 
-        methods = top.table("belt_method", required=False)
-        if methods is not None:
-            for profile in list(methods.data):
-                m = methods.table(profile)
-                if profile not in PROFILE_PITCH:
-                    raise m.error("", f"unknown belt profile {profile!r}; known: {', '.join(PROFILE_PITCH)}")
-                grooves = _number_list(m, "grooves", integer=True)
-                tension = _number_list(m, "allowable_tension_N")
-                if len(grooves) != len(tension):
-                    raise m.error("allowable_tension_N", f"has {len(tension)} values for {len(grooves)} groove counts")
-                if any(b <= a for a, b in zip(grooves, grooves[1:])):
-                    raise m.error("grooves", "must increase")
-                cat.belt_methods[profile] = BeltMethod(
-                    profile, m.number("reference_width_mm", min=1.0, max=1e3) * 1e-3, tuple(int(g) for g in grooves),
-                    tuple(tension), m.number("peak_tension_factor", min=0.1, max=100.0),
-                    m.number("breaking_safety", min=0.1, max=100.0), m.string("source", ""))
-                m.finish()
-            methods.finish()
+        for profile, m in _profile_tables(top, "belt_method", "belt"):
+            grooves = _number_list(m, "grooves", integer=True)
+            tension = _number_list(m, "allowable_tension_N")
+            if len(grooves) != len(tension):
+                raise m.error("allowable_tension_N", f"has {len(tension)} values for {len(grooves)} groove counts")
+            if any(b <= a for a, b in zip(grooves, grooves[1:])):
+                raise m.error("grooves", "must increase")
+            cat.belt_methods[profile] = BeltMethod(
+                profile, m.number("reference_width_mm", min=1.0, max=1e3) * 1e-3, tuple(int(g) for g in grooves),
+                tuple(tension), m.number("peak_tension_factor", min=0.1, max=100.0),
+                m.number("breaking_safety", min=0.1, max=100.0), m.string("source", ""))
+            m.finish()
 
         for row in top.tables("belt", required=False):
             name = unique("belt", row)
@@ -336,6 +324,19 @@ def load_catalogue(extra_files=(), builtin: bool = True) -> Catalogue:
         pd = pitch_diameter(profile, teeth)
         cat.pulleys[name] = Pulley(name, profile, teeth, pd, float(cat.inertia_models[profile](pd)), "model")
     return cat
+
+
+def _profile_tables(top: Fields, key: str, what: str):
+    """``(profile, table)`` of every ``[key.PROFILE]`` table of a catalogue file; an unknown profile is an error."""
+    tables = top.table(key, required=False)
+    if tables is None:
+        return
+    for profile in list(tables.data):
+        m = tables.table(profile)
+        if profile not in PROFILE_PITCH:
+            raise m.error("", f"unknown {what} profile {profile!r}; known: {', '.join(PROFILE_PITCH)}")
+        yield profile, m
+    tables.finish()
 
 
 def _number_list(f: Fields, key: str, integer: bool = False) -> list[float]:
