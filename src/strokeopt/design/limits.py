@@ -201,18 +201,26 @@ class HandoverAccuracy(Limit):
     def on_cycle(self, g):
         req = g.request
         terms = [(t.name, e) for t in req.error_terms for e in [t.expression(g)] if e is not None]
-        g.handover_terms = terms
-        total = sum(v for _, v in terms) if terms else 0.0
-        g.handover_total = total
-        if terms and isinstance(total, (ca.MX, ca.SX)) and req.enforce_accuracy:
+        g.handover_terms = [(name, _largest(e.signed, e.bound)) for name, e in terms]
+        signed = sum(e.signed for _, e in terms) if terms else 0.0
+        bound = sum(e.bound for _, e in terms) if terms else 0.0
+        g.handover_total = _largest(signed, bound) if terms else 0.0
+        if terms and isinstance(signed, (ca.MX, ca.SX)) and req.enforce_accuracy:
             acc = req.settings.accuracy
             lim = LimitGroup("handover accuracy", "handover accuracy", acc, "m", lambda sig, ac=acc: ac * (1 + sig))
-            g.built.limit(lim, total / acc - 1.0)
+            g.built.limit(lim, ca.vertcat(signed + bound, bound - signed) / acc - 1.0)
 
     def report(self, nlp, outcome):
         return [{"name": f"handover accuracy ({name})", "value": value * 1e3,
                  "limit": nlp.request.settings.accuracy * 1e3, "unit": "mm"}
                 for name, value in outcome.handover_values()]
+
+
+def _largest(signed, bound):
+    """The largest error over the checked instants: ``max |signed| + bound`` (for reports, not a constraint)."""
+    if isinstance(signed, (ca.MX, ca.SX)):
+        return ca.mmax(ca.fabs(signed)) + bound
+    return abs(signed) + bound
 
 
 #: Limits of the kinematics, built with every move.

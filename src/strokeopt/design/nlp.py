@@ -197,7 +197,8 @@ def add_moves(g: Graph) -> None:
     settings, mesh, moves = req.settings, req.mesh, req.moves
     n, d = mesh.intervals, mesh.degree
     if free_time(req.objective):  # every duration is the cycle time times its fixed fraction of the cycle
-        g.time_scale = b.var(TIME_SCALE, (1, 1), TIME_SCALE_BOUNDS[0], TIME_SCALE_BOUNDS[1], 1.0)
+        g.time_scale = b.var(TIME_SCALE, (1, 1), lambda r: 1.0 if r.rate_cap else TIME_SCALE_BOUNDS[0],
+                             TIME_SCALE_BOUNDS[1], 1.0)
     g.T = [b.param(f"T{mv.index}", lambda r, k=k: r.moves[k].duration) * g.time_scale
            for k, mv in enumerate(moves)]
     for k, mv in enumerate(moves):

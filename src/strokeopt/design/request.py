@@ -204,6 +204,19 @@ class DriveSetup:
         return float(abs(np.asarray(terms.load_force).ravel()[0]))
 
 
+@dataclass(frozen=True)
+class ErrorExpression:
+    """A handover error term in the NLP: ``signed``, the error [m] at each instant the term checks
+    (a CasADi column; the terms of one design check the same instants, or a scalar for all of
+    them), and ``bound``, a magnitude [m] added at every instant (an encoder count). The design
+    holds ``-accuracy <= signed_total -/+ bound_total <= accuracy`` row by row: constraints
+    linear in the signed error, where a maximum of absolute values would be neither smooth nor
+    sparse."""
+
+    signed: Any
+    bound: Any = 0.0
+
+
 class ErrorTerm(Protocol):
     """A term of the position error at the handover, summed and held within ``[design] handover_accuracy_mm``.
 
@@ -214,7 +227,7 @@ class ErrorTerm(Protocol):
     * ``name``: how the checks table names it (``handover accuracy (<name>)``);
     * ``fixed_error(problem)``: the part that does not depend on the design [m] (checked before
       solving), or None;
-    * ``expression(nlp)``: the error [m] as a CasADi expression of the NLP under construction
+    * ``expression(nlp)``: the error as an :class:`ErrorExpression` of the NLP under construction
       (:class:`~strokeopt.design.nlp.Graph`: ``nlp.request``, ``nlp.built.params``, ``nlp.si``), or
       None when the term does not apply to this problem. Numbers that change between solves enter
       as parameters, functions of the solve's :class:`SolveRequest` (its ``cache`` holds what they
@@ -234,7 +247,8 @@ class SolveRequest:
 
     ``pin_times``: unit times where each move passes each load switch (see :mod:`.pins`); None: found
     from the warm start (or the initial guess). ``cache``: numbers a parameter function computes once
-    per solve (not copied by :func:`dataclasses.replace`).
+    per solve (not copied by :func:`dataclasses.replace`). ``rate_cap``: with a free cycle time
+    (``min_time``), the rate may not exceed ``spm`` (the time scale is at least 1).
     """
 
     problem: Any
@@ -251,6 +265,7 @@ class SolveRequest:
     enforce_accuracy: bool = False
     error_terms: tuple = ()
     pin_times: dict | None = None
+    rate_cap: bool = False
     cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @cached_property
