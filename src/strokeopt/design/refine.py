@@ -34,8 +34,12 @@ from ..errors import SolverError
 PIN_ITERATIONS = 5
 #: A free cycle time (min_time): re-solves at the rate found at most, and the relative change of the
 #: rate below which it has settled.
-RATE_ITERATIONS = 8
+RATE_ITERATIONS = 12
 RATE_TOLERANCE = 1e-3
+#: The relative width of a bracket of rates (one solves faster than itself, one slower) at which a
+#: rate that never settled is capped at its lower end: ``F`` jumps there (the handover error's
+#: phase in the belt's vibration changes with the rate), and halving further costs a solve per halving.
+RATE_BRACKET = 4e-3
 
 
 @dataclass
@@ -114,23 +118,58 @@ def solve_one(req: SolveRequest) -> Outcome:
 
 def solve_free_time(req: SolveRequest) -> Outcome:
     """The highest rate as a fixed point: the NLP's numbers that depend on the rate (the servo term's
-    kernel weights and load error, the period) are computed at the request's rate and are exact at
-    time scale 1; the solve at a rate gives a new rate (the request's over the time scale), the next
-    solve is warm-started there, until the rate moves by less than :data:`RATE_TOLERANCE` (relative).
-    The outcome is read at the last rate (time scale 1: every number exact)."""
+    kernel weights and load error, the period) are computed at the request's rate ``r`` and are exact
+    at time scale 1; the solve gives a rate ``F(r)`` (the request's over the time scale). The rate
+    has settled when ``F(r)`` is within :data:`RATE_TOLERANCE` of ``r``. Until a rate that solves
+    faster than itself (``F(r) > r``) and one that solves slower are known, the next rate is
+    ``F(r)``; then a secant of ``F(r) - r`` inside that bracket (Illinois, else its middle): where the
+    handover error binds, the error changes with the rate in a way the frozen numbers do not see,
+    and the plain iteration jumps about. A bracket narrower than :data:`RATE_BRACKET` that never settled
+    (``F`` jumps there) ends in a solve at its lower rate with the rate capped there
+    (``rate_cap``). The outcome is read at the last rate (time scale 1: every number exact)."""
     spm, warm, radius0, mesh = req.spm, req.warm, req.radius0, req.mesh
     total_time, iterations, rates = 0.0, 0, []
+    lo = hi = last = None  # (rate, F(rate) - rate): faster than itself / slower than itself; the side set last
+    cap = False
     for _ in range(RATE_ITERATIONS):
-        out = solve_at_rate(replace(req, spm=spm, warm=warm, radius0=radius0, mesh=mesh))
+        try:
+            out = solve_at_rate(replace(req, spm=spm, warm=warm, radius0=radius0, mesh=mesh, rate_cap=cap))
+        except SolverError:
+            if lo is None or cap:  # no rate known that solves: the reason is the limits', not the rate's
+                raise
+            rates.append(math.nan)
+            hi = (spm, -0.5 * spm)  # no design at this rate's numbers: too fast
+            spm = lo[0] + 0.5 * (hi[0] - lo[0]) if hi[0] - lo[0] > RATE_TOLERANCE * lo[0] else lo[0]
+            cap = cap or spm == lo[0]
+            continue
         total_time += out.solve_time
         iterations += out.iterations
         rate = solution_request(out.nlp, out.x).spm
         rates.append(rate)
         warm, radius0, mesh = out.sols, out.radius, out.nlp.request.mesh
-        settled = abs(rate / spm - 1.0) <= RATE_TOLERANCE
-        spm = rate
-        if settled:
+        req = replace(req, enforce_accuracy=out.nlp.request.enforce_accuracy)  # a binding accuracy stays held
+        gap = rate - spm
+        if cap or abs(gap) <= RATE_TOLERANCE * spm:
+            spm = rate
             break
+        side = None
+        if gap > 0 and (hi is None or spm < hi[0]):
+            lo, side = (spm, gap), "lo"
+        elif gap < 0 and (lo is None or spm > lo[0]):
+            hi, side = (spm, gap), "hi"
+        if lo is None or hi is None:
+            spm = rate
+        elif hi[0] - lo[0] <= RATE_BRACKET * lo[0]:
+            spm, cap = lo[0], True
+        else:  # Illinois: the end kept twice has its gap halved, so the secant cannot creep from one side
+            if side == "lo" and last == "lo":
+                hi = (hi[0], 0.5 * hi[1])
+            elif side == "hi" and last == "hi":
+                lo = (lo[0], 0.5 * lo[1])
+            width = hi[0] - lo[0]
+            x = lo[0] - lo[1] * width / (hi[1] - lo[1])
+            spm = x if lo[0] + 0.02 * width <= x <= hi[0] - 0.02 * width else lo[0] + 0.5 * width
+        last = side
     else:
         raise SolverError(f"min_time: the stitch rate did not settle within {RATE_ITERATIONS} re-solves "
                           f"(relative change {RATE_TOLERANCE:g}): " + ", ".join(f"{r:.2f}" for r in rates) + " spm")
@@ -151,7 +190,7 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
     warm, mesh = req.warm, req.mesh
     for attempt in range(settings.refinements + 1):
         pins = None
-        enforce = False
+        enforce = req.enforce_accuracy and bool(req.error_terms)
         for _ in range(PIN_ITERATIONS):
             t0 = time.perf_counter()
             nlp = prepare(replace(req, mesh=mesh, warm=warm, pin_times=pins,
