@@ -39,8 +39,6 @@ def size_pairs_loop(kin, motors, pulleys, load, limits, belt, spm, period):
 @benchmark("size_catalogue", "size the full catalogue (7 motors x 20 GT3 pulleys) at 600 spm, reference problem",
            target_s=0.5)
 def _bench_size_catalogue() -> BenchResult:
-    import numpy as np
-
     from ..drive.sizing import candidates
 
     problem = load_problem(reference_problem_path())

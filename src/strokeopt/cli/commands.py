@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ..errors import ProblemError
-from .common import _emit, _load, _plot_path, _spm_value, _write_figure, drive_used, progress_bar, spm_tag
+from .common import _emit, _load, _plot_path, _write_figure, drive_used, progress_bar, spm_tag
 
 
 def cmd_laws(args) -> int:

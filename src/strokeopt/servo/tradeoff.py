@@ -138,6 +138,10 @@ def _binding_of(reason: str) -> str:
 CONFIRM_TOLERANCE = 2e-3
 #: Trial rates of the confirming search at most, per accuracy.
 CONFIRM_TRIALS = 6
+#: Consecutive trial rates without a design (the design's own error term cannot meet the accuracy
+#: there) after which the confirming search gives up: lower rates do not help once the error is
+#: set by the table, the encoder and the belt's vibration rather than by the speed.
+NO_DESIGN_TRIALS = 2
 
 
 @dataclass
@@ -194,6 +198,7 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
     say = progress or (lambda step, text: None)
     spm0 = problem.spm if start is None else start
     warm, ceiling, points = None, None, {}
+    confirmed, prev_acc = None, None  # the latest confirmed trial and its accuracy
     for acc in sorted(accuracies, reverse=True):
         # the same drive as the classic law: the problem's motor and pulley
         settings = replace(base, accuracy=acc, motor_choice="fixed", pulley="fixed")
@@ -201,6 +206,13 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
         if ceiling is not None and ceiling <= 0.0:
             points[acc] = TradeoffPoint(acc, "optimal", None, "handover_accuracy", None,
                                         "a looser accuracy has no confirmed rate")
+            continue
+        if confirmed is not None and confirmed.result.handover_error <= acc:
+            # the looser accuracy's design meets this one too, and its rate bounds this one's
+            looser = points[prev_acc]
+            points[acc] = replace(looser, accuracy=acc, detail=looser.detail + f" (the design of {prev_acc * 1e3:g} mm)")
+            say(tag, f"{confirmed.spm:.1f} spm: the design of {prev_acc * 1e3:g} mm meets it "
+                     f"({confirmed.result.handover_error * 1e3:.4f} mm)")
             continue
         try:
             d = solve_design(problem, objective="min_time", spm=spm0, settings=settings, warm_start=warm)
@@ -233,7 +245,7 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
         detail = (f"min_time {d.spm:.1f} spm; at {found:.1f} spm the full simulation gives {error * 1e3:.4f} mm"
                   + ("" if hi.ok else f"; above: {hi.reason}"))
         points[acc] = TradeoffPoint(acc, "optimal", max_spm, binding, error, detail)
-        ceiling = found
+        ceiling, confirmed, prev_acc = found, lo, acc
         say(tag, f"{found:.1f} spm confirmed ({error * 1e3:.4f} mm)")
     return [points[a] for a in accuracies]
 
@@ -261,12 +273,13 @@ def _search_below(problem, hi: _Trial, settings, acc: float, resolution: float, 
         factor = 1.0 / math.sqrt(1.0 + t.excess) if math.isfinite(t.excess) else 1 / 1.25
         return t.spm * min(factor, 1.0 - CONFIRM_TOLERANCE)
 
-    lo, trials = None, 0
+    lo, trials, no_design = None, 0, 0
     x = step_down(hi)
     while lo is None:
-        if x < lowest or trials >= CONFIRM_TRIALS:
+        if x < lowest or trials >= CONFIRM_TRIALS or no_design >= NO_DESIGN_TRIALS:
             return None
         t, trials = trial(x), trials + 1
+        no_design = no_design + 1 if t.design is None else 0
         if t.ok:
             lo = t
         else:
