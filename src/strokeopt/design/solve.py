@@ -41,7 +41,7 @@ from .limits import DRIVE_LIMITS, MOVE_LIMITS
 from .nlp import prepare
 from .objectives import OBJECTIVES, TORQUE_OBJECTIVES, free_time, needs_drive_error, unknown_objective_error
 from .parts import choose_parts
-from .refine import RATE_TOLERANCE, Outcome, solve_one
+from .refine import RATE_BRACKET, RATE_TOLERANCE, Outcome, solve_one
 from .request import DriveChoice, DriveSetup, SolveRequest
 from .result import Design, stroke_from_solutions
 from .settings import DesignSettings
@@ -145,6 +145,10 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
 def _rate_note(design: Design, best: Outcome) -> str:
     """What a free cycle time found: the highest rate, the limits that bind it, the re-solves it took."""
     binding = [name for name in design.active_constraints if not name.startswith("handover position")]
+    if best.nlp.request.rate_cap:  # a bracket of rates: just above, the design's numbers at that rate fail
+        binding = [n for n in binding if n != "handover accuracy"]
+        binding.insert(0, f"handover accuracy (bracketed within {100 * RATE_BRACKET:g} %: a little faster, no "
+                          "design meets it with the error term taken at its own rate)")
     return (f"highest stitch rate {design.spm:.1f} spm (stitch period {60e3 / design.spm:.3f} ms), bound by: "
             f"{'; '.join(binding) or 'no limit (the time scale reached its bound)'}; the rate settled within "
             f"{100 * RATE_TOLERANCE:g} % after {len(best.rates)} solves ("
