@@ -122,14 +122,14 @@ def solve_free_time(req: SolveRequest) -> Outcome:
     at time scale 1; the solve gives a rate ``F(r)`` (the request's over the time scale). The rate
     has settled when ``F(r)`` is within :data:`RATE_TOLERANCE` of ``r``. Until a rate that solves
     faster than itself (``F(r) > r``) and one that solves slower are known, the next rate is
-    ``F(r)``; then a secant of ``F(r) - r`` inside that bracket (Illinois, else its middle): where the
-    handover error binds, the error changes with the rate in a way the frozen numbers do not see,
-    and the plain iteration jumps about. A bracket narrower than :data:`RATE_BRACKET` that never settled
+    ``F(r)``; then the middle of that bracket (a rate without a design counts as too fast): where
+    the handover error binds, the error changes with the rate in a way the frozen numbers do not see,
+    ``F`` jumps, and the plain iteration jumps about with it. A bracket narrower than :data:`RATE_BRACKET` that never settled
     (``F`` jumps there) ends in a solve at its lower rate with the rate capped there
     (``rate_cap``). The outcome is read at the last rate (time scale 1: every number exact)."""
     spm, warm, radius0, mesh = req.spm, req.warm, req.radius0, req.mesh
     total_time, iterations, rates = 0.0, 0, []
-    lo = hi = last = None  # (rate, F(rate) - rate): faster than itself / slower than itself; the side set last
+    lo = hi = None  # the highest rate known to solve faster than itself, the lowest known not to
     cap = False
     for _ in range(RATE_ITERATIONS):
         try:
@@ -138,38 +138,27 @@ def solve_free_time(req: SolveRequest) -> Outcome:
             if lo is None or cap:  # no rate known that solves: the reason is the limits', not the rate's
                 raise
             rates.append(math.nan)
-            hi = (spm, -0.5 * spm)  # no design at this rate's numbers: too fast
-            spm = lo[0] + 0.5 * (hi[0] - lo[0]) if hi[0] - lo[0] > RATE_TOLERANCE * lo[0] else lo[0]
-            cap = cap or spm == lo[0]
-            continue
-        total_time += out.solve_time
-        iterations += out.iterations
-        rate = solution_request(out.nlp, out.x).spm
-        rates.append(rate)
-        warm, radius0, mesh = out.sols, out.radius, out.nlp.request.mesh
-        req = replace(req, enforce_accuracy=out.nlp.request.enforce_accuracy)  # a binding accuracy stays held
-        gap = rate - spm
-        if cap or abs(gap) <= RATE_TOLERANCE * spm:
-            spm = rate
-            break
-        side = None
-        if gap > 0 and (hi is None or spm < hi[0]):
-            lo, side = (spm, gap), "lo"
-        elif gap < 0 and (lo is None or spm > lo[0]):
-            hi, side = (spm, gap), "hi"
+            rate = 0.0  # no design with this rate's numbers: too fast
+        else:
+            total_time += out.solve_time
+            iterations += out.iterations
+            rate = solution_request(out.nlp, out.x).spm
+            rates.append(rate)
+            warm, radius0, mesh = out.sols, out.radius, out.nlp.request.mesh
+            req = replace(req, enforce_accuracy=out.nlp.request.enforce_accuracy)  # a binding accuracy stays held
+            if cap or abs(rate - spm) <= RATE_TOLERANCE * spm:
+                spm = rate
+                break
+        if rate > spm and (hi is None or spm < hi):
+            lo = spm
+        elif rate < spm and (lo is None or spm > lo):
+            hi = spm
         if lo is None or hi is None:
             spm = rate
-        elif hi[0] - lo[0] <= RATE_BRACKET * lo[0]:
-            spm, cap = lo[0], True
-        else:  # Illinois: the end kept twice has its gap halved, so the secant cannot creep from one side
-            if side == "lo" and last == "lo":
-                hi = (hi[0], 0.5 * hi[1])
-            elif side == "hi" and last == "hi":
-                lo = (lo[0], 0.5 * lo[1])
-            width = hi[0] - lo[0]
-            x = lo[0] - lo[1] * width / (hi[1] - lo[1])
-            spm = x if lo[0] + 0.02 * width <= x <= hi[0] - 0.02 * width else lo[0] + 0.5 * width
-        last = side
+        elif hi - lo <= RATE_BRACKET * lo:
+            spm, cap = lo, True
+        else:
+            spm = 0.5 * (lo + hi)
     else:
         raise SolverError(f"min_time: the stitch rate did not settle within {RATE_ITERATIONS} re-solves "
                           f"(relative change {RATE_TOLERANCE:g}): " + ", ".join(f"{r:.2f}" for r in rates) + " spm")
