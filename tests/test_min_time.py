@@ -108,10 +108,10 @@ def test_cli_solve_min_time_json(capsys):
 
 
 #: The bisection with the servo term over the handover window: optimal stroke 550/830/910/910 spm at
-#: 0.05/0.1/0.2/>=0.3 mm (138 s); the min_time continuation 490/880/910/910 (94 s). They agree where the
+#: 0.05/0.1/0.2/>=0.3 mm (102 s); the min_time continuation 450/880/910/910 (67 s). They agree where the
 #: torque limit binds (compared here at 0.5 mm); where the handover accuracy binds, each lands in
 #: another local optimum of the design (the phase of the belt's vibration in the handover window) and
-#: they differ by 6-11 %. With the term at the end of the move only, the bisection gave 520/850/900/910.
+#: they differ by 6-18 %. With the term at the end of the move only, the bisection gave 520/850/900/910.
 @pytest.mark.slow
 def test_tradeoff_min_time_agrees_with_the_bisection(reference):
     from strokeopt.servo.tradeoff import tradeoff_optimal, tradeoff_optimal_bisection
