@@ -320,6 +320,17 @@ def _objective(args, problem) -> str | None:
     return args.objective or (problem.design.objective if problem.design else None)
 
 
+def _cam_spec(args):
+    """The cam table of ``solve --out`` as its options ask (checked before the solve)."""
+    from ..io.design_file import CamTableSpec
+    from ..io.ranges import check_master_counts, parse_cam_resolution
+
+    spec = CamTableSpec(parse_cam_resolution(args.cam_table_resolution), args.master_unit, args.master_counts)
+    if args.master_unit == "counts":
+        check_master_counts(args.master_counts, spec.points)
+    return spec
+
+
 def cmd_solve(args) -> int:
     from ..design.compare import compare_with_laws
     from ..design.objectives import OBJECTIVES
@@ -337,6 +348,7 @@ def cmd_solve(args) -> int:
     if args.objective is not None and args.objective not in OBJECTIVES:
         raise ProblemError("--objective", "", f"{args.objective!r} is not one of {', '.join(OBJECTIVES)}")
     problem = _load(args, fix_in_design=True)  # (an unwritable --out was refused before: cli.common.check_outputs)
+    cam_spec = _cam_spec(args)
     progress = progress_bar(args, "solve", "solve")
     if args.study == "mesh":
         rows = mesh_study(problem, objective=args.objective, progress=progress and (lambda it: progress(it, "mesh")))
@@ -392,7 +404,7 @@ def cmd_solve(args) -> int:
         print(design_text(design, comparison))
         print(drive_text(chosen))
     if args.out is not None:
-        for path in design.write(args.out):
+        for path in design.write(args.out, spec=cam_spec, extra={"comparison": comparison, "drive": chosen}):
             print(f"written {path}", file=sys.stderr if args.json else sys.stdout)
     # one figure: --plot FILE, else into --out DIR beside design.json, else strokeopt-out/
     fig_path = _plot_path(args, "solve", spm_tag(design.spm), design.objective)

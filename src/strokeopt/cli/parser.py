@@ -61,6 +61,17 @@ def _simulation_arguments(p) -> None:
                    help="absolute tolerance in scaled states: positions in mm, velocities in m/s (default 1e-6)")
 
 
+def _cam_table_options(p: argparse.ArgumentParser) -> None:
+    """How the cam table of ``solve --out`` samples the cycle (io/design_file.CamTableSpec)."""
+    p.add_argument("--cam-table-resolution", metavar="DEG|N/cycle", default="0.1",
+                   help="cam table step: degrees of the master axis per point (0.1 or 0.1deg; default 0.1, the "
+                        "thesis drive's 3600 positions per revolution) or points per cam cycle (720/cycle)")
+    p.add_argument("--master-unit", choices=("deg", "counts"), default="deg",
+                   help="the cam table's master column: cam angle in deg (default) or master axis counts")
+    p.add_argument("--master-counts", type=int, default=3600, metavar="N",
+                   help="master axis counts per cam cycle with --master-unit counts (default 3600)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="strokeopt",
@@ -143,8 +154,10 @@ def build_parser() -> argparse.ArgumentParser:
     _drive_options(p, "the solve re-solves the stroke at that rate on that drive. --motor/--pulley-teeth fix the "
                       "motor/pulley (the same as --set design.motor_choice='\"fixed\"' / design.pulley='\"fixed\"')")
     _verbose_option(p, "IPOPT's (and Bonmin's) output of the solve")
-    p.add_argument("--out", metavar="DIR", help="write design.json and cam_table.csv (0.1 deg) into DIR, and the "
-                                                "figure too unless --plot or --json says otherwise")
+    p.add_argument("--out", metavar="DIR", help="write design.json, the cam table (cam_table.csv, cam_table.txt) "
+                                                "and the design report (report.html) into DIR, and the figure too "
+                                                "unless --plot or --json says otherwise")
+    _cam_table_options(p)
     p.add_argument("--study", choices=("mesh",), help="'mesh': objective error, violation between nodes and time "
                                                       "over mesh sizes and collocation degrees")
     _plot_option(p, "solve_<spm>spm_<objective>")

@@ -122,9 +122,9 @@ class Design:
         """The value of the check ``name`` (``peak_torque``, ``rms_torque``...), None when not checked."""
         return next((c["value"] for c in self.checks if c["name"] == name), None)
 
-    def write(self, out_dir: str | Path, resolution_deg: float = 0.1) -> list[Path]:
-        """Write ``design.json`` and ``cam_table.csv`` into ``out_dir``; returns the paths
-        (:func:`strokeopt.io.design_file.write_design`)."""
+    def write(self, out_dir: str | Path, resolution_deg: float = 0.1, spec=None, extra: dict | None = None) -> list[Path]:
+        """Write ``design.json``, ``cam_table.csv`` and ``cam_table.txt`` into ``out_dir``; returns the paths
+        (:func:`strokeopt.io.design_file.write_design`; ``spec``: a ``CamTableSpec``, resolution and master unit)."""
         from ..io.design_file import write_design
 
-        return write_design(self, out_dir, resolution_deg)
+        return write_design(self, out_dir, resolution_deg, spec, extra)
