@@ -57,7 +57,7 @@ def test_text_report_and_out_dir(capsys, tmp_path):
     assert "active constraints: jerk bound move 1" in text
     assert "modified_sine (chi = 0.095)" in text  # the comparison with the file's law
     # the figure once, where --plot says (not also into --out)
-    assert sorted(f.name for f in out.iterdir()) == ["cam_table.csv", "cam_table.txt", "design.json"]
+    assert sorted(f.name for f in out.iterdir()) == ["cam_table.csv", "cam_table.txt", "design.json", "report.html"]
     assert (tmp_path / "f.png").is_file()
     # the column names follow the '#' lines stating the cycle, master, motor, pulley and units
     header = [line for line in (out / "cam_table.csv").read_text().splitlines() if not line.startswith("#")][0]

@@ -320,6 +320,23 @@ def _objective(args, problem) -> str | None:
     return args.objective or (problem.design.objective if problem.design else None)
 
 
+def solve_once(args, problem, progress=None):
+    """One design solve as ``strokeopt solve`` makes it: the design (with the full servo simulation's
+    handover check), its comparison with the classic laws, and the drive it used (``solve --json``)."""
+    from ..design.compare import compare_with_laws
+    from ..design.solve import solve_design
+
+    design = solve_design(problem, objective=args.objective, verbose=getattr(args, "verbose", False),
+                          progress=progress and (lambda it: progress(it, "motors")),
+                          handover_check=_servo_handover_check(problem))
+    comparison = compare_with_laws(design)
+    chosen = drive_used(args, problem, design.motor, design.pulley_teeth)
+    if problem.design is not None and (problem.design.motor_choice != "fixed" or problem.design.pulley != "fixed"):
+        chosen["from"] = (f"the solve's choice: design.motor_choice = {problem.design.motor_choice}, design.pulley "
+                          f"= {problem.design.pulley}")
+    return design, comparison, chosen
+
+
 def _cam_spec(args):
     """The cam table of ``solve --out`` as its options ask (checked before the solve)."""
     from ..io.design_file import CamTableSpec
@@ -332,9 +349,7 @@ def _cam_spec(args):
 
 
 def cmd_solve(args) -> int:
-    from ..design.compare import compare_with_laws
     from ..design.objectives import OBJECTIVES
-    from ..design.solve import solve_design
     from ..design.studies import fastest_feasible, mesh_study, sweep_design
     from ..report.design import design_summary, design_text, plot_design, plot_design_sweep, plot_mesh_study
     from ..report.format import drive_text, format_table, to_json
@@ -390,14 +405,7 @@ def cmd_solve(args) -> int:
                   file=sys.stderr)
             return 1
         return 0
-    design = solve_design(problem, objective=args.objective, verbose=args.verbose,
-                          progress=progress and (lambda it: progress(it, "motors")),
-                          handover_check=_servo_handover_check(problem))
-    comparison = compare_with_laws(design)
-    chosen = drive_used(args, problem, design.motor, design.pulley_teeth)
-    if problem.design is not None and (problem.design.motor_choice != "fixed" or problem.design.pulley != "fixed"):
-        chosen["from"] = (f"the solve's choice: design.motor_choice = {problem.design.motor_choice}, design.pulley "
-                          f"= {problem.design.pulley}")
+    design, comparison, chosen = solve_once(args, problem, progress)
     if args.json:
         _emit(to_json({**design_summary(design), "drive": chosen, "comparison": comparison}))
     else:
@@ -406,6 +414,11 @@ def cmd_solve(args) -> int:
     if args.out is not None:
         for path in design.write(args.out, spec=cam_spec, extra={"comparison": comparison, "drive": chosen}):
             print(f"written {path}", file=sys.stderr if args.json else sys.stdout)
+        from ..report.design_report import gather, write_report
+
+        summary = {**design_summary(design), "drive": chosen, "comparison": comparison}
+        info = write_report(gather(problem, design, summary), Path(args.out) / "report.html")  # `strokeopt report`
+        print(f"written {info['report']}", file=sys.stderr if args.json else sys.stdout)
     # one figure: --plot FILE, else into --out DIR beside design.json, else strokeopt-out/
     fig_path = _plot_path(args, "solve", spm_tag(design.spm), design.objective)
     if fig_path is not None and args.plot is None and args.out is not None:

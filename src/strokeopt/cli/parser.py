@@ -253,4 +253,36 @@ def build_parser() -> argparse.ArgumentParser:
     _drive_options(p, "(its motor and pulley only: the stroke is solved again at every rate)")
     _plot_option(p, "tradeoff_<strokes>_<law>_<motor>")
     p.set_defaults(run=cmd_tradeoff)
+    _report_parsers(sub, problem)
     return parser
+
+
+def _report_parsers(sub, problem) -> None:
+    """``report`` and ``compare``: HTML files of designs (cli/report_commands.py)."""
+    from .report_commands import cmd_report
+
+    p = sub.add_parser("report", parents=[problem], help="one self-contained HTML design report (print it, hand it over)",
+                       description="Write the design report of a design: one HTML file, every figure inlined, no "
+                                   "script or external resource, printable (a page per section). Sections in the "
+                                   "order of the data flow: problem and timing diagram; stroke of bar and motor with "
+                                   "the classic-law comparison; drive (torque-speed path over the motor's curves, "
+                                   "checks with margins, the binding limit); handover accuracy (servo, belt, "
+                                   "encoder); contact-model verification per scene; numerical accuracy; the inputs "
+                                   "(the problem as resolved with every --set) and versions. Without --design the "
+                                   "design is solved first, as 'strokeopt solve' does; 'solve --out DIR' writes "
+                                   "DIR/report.html too.",
+                       epilog="Examples: strokeopt report problems/deco2000_needle_bar.toml --out report.html; "
+                              "strokeopt solve problems/deco2000_needle_bar.toml --spm 600 --out out && strokeopt "
+                              "report problems/deco2000_needle_bar.toml --design out/design.json --out "
+                              "out/report.html --scene all")
+    p.add_argument("--out", dest="html", required=True, metavar="FILE.html", help="the report file to write")
+    p.add_argument("--objective", help="objective of the solve (without --design; overrides design.objective)")
+    _stroke_options(p, law=False)
+    _drive_options(p, "the report shows that design (its numbers as the file holds them) instead of solving")
+    p.add_argument("--scene", action="append", metavar="NAME",
+                   help="contact scene to verify (repeatable; 'all': every scene; default: release, else the "
+                        "first: the others can take seconds each)")
+    p.add_argument("--method", default="cvodes", choices=("cvodes", "idas"), help="SUNDIALS integrator (default cvodes)")
+    p.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance of the scenes (default 1e-5)")
+    p.add_argument("--atol", type=float, default=1e-6, help="absolute tolerance of the scenes (default 1e-6)")
+    p.set_defaults(run=cmd_report, plot=None, verbose=False)
