@@ -259,7 +259,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _report_parsers(sub, problem) -> None:
     """``report`` and ``compare``: HTML files of designs (cli/report_commands.py)."""
-    from .report_commands import cmd_report
+    from .report_commands import cmd_compare, cmd_report
 
     p = sub.add_parser("report", parents=[problem], help="one self-contained HTML design report (print it, hand it over)",
                        description="Write the design report of a design: one HTML file, every figure inlined, no "
@@ -286,3 +286,24 @@ def _report_parsers(sub, problem) -> None:
     p.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance of the scenes (default 1e-5)")
     p.add_argument("--atol", type=float, default=1e-6, help="absolute tolerance of the scenes (default 1e-6)")
     p.set_defaults(run=cmd_report, plot=None, verbose=False)
+
+    p = sub.add_parser("compare", help="designs side by side in one HTML file (overlaid curves, a column per design)",
+                       description="Compare two or more designs (design.json files of 'strokeopt solve --out'): the "
+                                   "design report's sections with the designs side by side: their strokes and "
+                                   "torques overlaid, the torque-speed paths over the motor's curves, and one table "
+                                   "per section with a column per design, the better value of each row marked "
+                                   "(lower torque, jerk, error; larger margin). Each design is read with the problem "
+                                   "file and --set texts it records.",
+                       epilog="Example: strokeopt solve problems/deco2000_needle_bar.toml --spm 600 --out peak && "
+                              "strokeopt solve problems/deco2000_needle_bar.toml --spm 600 --objective "
+                              "min_rms_torque --out rms && strokeopt compare peak/design.json rms/design.json "
+                              "--out compare.html")
+    p.add_argument("designs", nargs="+", metavar="DESIGN.json", help="two or more design files")
+    p.add_argument("--out", dest="html", required=True, metavar="FILE.html", help="the comparison file to write")
+    p.add_argument("--scene", action="append", metavar="NAME",
+                   help="contact scene to verify for each design (repeatable; 'all'; default: release, else the first)")
+    p.add_argument("--method", default="cvodes", choices=("cvodes", "idas"), help="SUNDIALS integrator (default cvodes)")
+    p.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance of the scenes (default 1e-5)")
+    p.add_argument("--atol", type=float, default=1e-6, help="absolute tolerance of the scenes (default 1e-6)")
+    p.add_argument("--json", action="store_true", help="print only JSON on stdout (for scripts)")
+    p.set_defaults(run=cmd_compare, plot=None, verbose=False)

@@ -74,3 +74,43 @@ def cmd_report(args) -> int:
         print(f"written {out} ({info['size_bytes'] / 1024:.0f} KB, built in {info['build_time_s']:.2f} s; design "
               f"{source}; scenes simulated: {', '.join(data.scenes) or 'none'})")
     return 0
+
+
+def _design_file(path: str):
+    """A design file's problem (its file, its --set texts, its stitch rate), the design and its ``solve --json``
+    report as ``solve --out`` stored it."""
+    from ..contact.verify import load_design
+    from ..design.compare import compare_with_laws
+    from ..design.result import design_from_data
+    from ..io.design_file import read_design
+    from ..report.design import design_summary
+
+    data, stroke = read_design(path)
+    problem = load_design(path).problem
+    design = design_from_data(problem, data, stroke)
+    chosen = data.get("drive") or {"motor": design.motor, "pulley_teeth": design.pulley_teeth, "from": str(path)}
+    return problem, design, {**design_summary(design), "drive": chosen,
+                             "comparison": data.get("comparison") or compare_with_laws(design)}
+
+
+def cmd_compare(args) -> int:
+    from ..report.compare_report import write_compare
+    from ..report.design_report import gather
+    from ..report.format import to_json
+
+    out = _html_path(args.html)
+    if len(args.designs) < 2:
+        raise ProblemError("DESIGN.json", "", "compare needs two or more design files")
+    loaded = [_design_file(path) for path in args.designs]  # every file read and checked before any simulation
+    t0 = time.perf_counter()
+    datas = []
+    for path, (problem, design, summary) in zip(args.designs, loaded):
+        datas.append(gather(problem, design, summary, _scenes(args, problem), _sim_options(args), f"read from {path}"))
+    info = write_compare(datas, out)
+    info.update(status="ok", build_time_s=time.perf_counter() - t0, designs=list(args.designs))
+    if args.json:
+        _emit(to_json(info))
+    else:
+        print(f"written {out} ({info['size_bytes'] / 1024:.0f} KB, {len(datas)} designs, built in "
+              f"{info['build_time_s']:.2f} s)")
+    return 0
