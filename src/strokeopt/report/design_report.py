@@ -320,7 +320,7 @@ def section_numerics(d: ReportData) -> str:
 
     s, design = d.summary, d.design
     settings = design.settings or DesignSettings()
-    fg = s.get("fine_grid") or {}
+    fg = design.fine_grid or {}
     opts = solver_options(settings, None, False)
     facts = [("mesh intervals per move", s["mesh"]["intervals"], "mesh.intervals"),
              ("collocation degree", s["mesh"]["degree"], "mesh.degree"),
@@ -361,7 +361,10 @@ def section_inputs(d: ReportData) -> str:
 
     p = d.problem
     sets = list(getattr(p, "overrides", ()))
+    drive = d.summary.get("drive") or {}
     facts = [("problem file", str(p.file), None), ("--set", "; ".join(sets) or "none", None),
+             ("motor and pulley of the design", f"{drive.get('motor')}, {drive.get('pulley_teeth')} teeth, from "
+                                                f"{drive.get('from')}" if drive else "-", None),
              ("created", d.created, None)] + [(k, v, None) for k, v in d.versions.items()]
     rows = [[h.cell(k), h.cell(json.dumps(v) if not isinstance(v, str) else f'"{v}"')] for k, v in _flat(p.data)]
     return (h.key_table(facts) + h.heading("The problem as resolved (every value after the --set overrides)")
