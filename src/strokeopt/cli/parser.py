@@ -55,6 +55,11 @@ def _plot_option(p: argparse.ArgumentParser, name: str) -> None:
 
 def _simulation_arguments(p) -> None:
     p.add_argument("--scene", help="scene of the problem file ([scenes.NAME]; default: release, else the first)")
+    _integrator_arguments(p)
+
+
+def _integrator_arguments(p) -> None:
+    """The contact model's integrator: --method, --rtol, --atol."""
     p.add_argument("--method", default="cvodes", choices=("cvodes", "idas"), help="SUNDIALS integrator (default cvodes)")
     p.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance (default 1e-5: impact velocity to ~1e-4 m/s)")
     p.add_argument("--atol", type=float, default=1e-6,
@@ -282,9 +287,7 @@ def _report_parsers(sub, problem) -> None:
     p.add_argument("--scene", action="append", metavar="NAME",
                    help="contact scene to verify (repeatable; 'all': every scene; default: release, else the "
                         "first: the others can take seconds each)")
-    p.add_argument("--method", default="cvodes", choices=("cvodes", "idas"), help="SUNDIALS integrator (default cvodes)")
-    p.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance of the scenes (default 1e-5)")
-    p.add_argument("--atol", type=float, default=1e-6, help="absolute tolerance of the scenes (default 1e-6)")
+    _integrator_arguments(p)
     p.set_defaults(run=cmd_report, plot=None, verbose=False)
 
     p = sub.add_parser("compare", help="designs side by side in one HTML file (overlaid curves, a column per design)",
@@ -302,8 +305,6 @@ def _report_parsers(sub, problem) -> None:
     p.add_argument("--out", dest="html", required=True, metavar="FILE.html", help="the comparison file to write")
     p.add_argument("--scene", action="append", metavar="NAME",
                    help="contact scene to verify for each design (repeatable; 'all'; default: release, else the first)")
-    p.add_argument("--method", default="cvodes", choices=("cvodes", "idas"), help="SUNDIALS integrator (default cvodes)")
-    p.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance of the scenes (default 1e-5)")
-    p.add_argument("--atol", type=float, default=1e-6, help="absolute tolerance of the scenes (default 1e-6)")
+    _integrator_arguments(p)
     p.add_argument("--json", action="store_true", help="print only JSON on stdout (for scripts)")
     p.set_defaults(run=cmd_compare, plot=None, verbose=False)

@@ -11,8 +11,6 @@ from __future__ import annotations
 import math
 import time
 
-import numpy as np
-
 from . import html as h
 from .design_report import ReportData, binding_check
 
@@ -36,7 +34,7 @@ def plot_overlay(datas: list[ReportData], names: list[str]):
 
     from ..design.torque import design_torque
     from ..motion.stroke import StrokeFunction
-    from .drive import draw_torque_speed
+    from .drive import draw_torque_speed, torque_angle_axis
     from .motion import draw_kinematics
 
     first = datas[0]
@@ -63,13 +61,7 @@ def plot_overlay(datas: list[ReportData], names: list[str]):
             drawn = True
         else:
             ax_w.plot(terms.omega * 60 / (2 * math.pi), terms.total, lw=1.2, color=line.get_color(), label=n)
-    ax_t.set_xlim(0, 360)
-    ax_t.set_xticks(np.arange(0, 361, 45))
-    ax_t.set_xlabel("cam angle [deg]")
-    ax_t.set_ylabel("motor torque [N m]")
-    ax_t.grid(True, alpha=0.3)
-    ax_t.legend(fontsize=8, loc="best")
-    ax_t.set_title("motor torque over the cycle")
+    torque_angle_axis(ax_t, "motor torque over the cycle")
     if drawn:
         ax_w.legend(fontsize=7, loc="best")
     return fig

@@ -138,25 +138,13 @@ def plot_drive(design):
     import matplotlib.pyplot as plt
 
     from ..design.torque import design_torque
-    from .drive import draw_torque_speed
+    from .drive import draw_torque_speed, draw_torque_terms
 
     t, terms = design_torque(design, samples=1441)
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.6), constrained_layout=True)
     draw_torque_speed(ax1, design.motor_spec, terms.omega, terms.total, t, design.problem.drive.limits,
                       f"{design.motor}: torque-speed path of the cycle")
-    angle = 360 * t / design.stroke.period
-    ax2.plot(angle, terms.total, color="k", lw=1.4, label="total")
-    for name, val in terms.as_dict().items():
-        val = np.broadcast_to(val, angle.shape)
-        if np.max(np.abs(val)) > 1e-9:
-            ax2.plot(angle, val, lw=0.9, label=name.replace("_", " "))
-    ax2.set_xlim(0, 360)
-    ax2.set_xticks(np.arange(0, 361, 45))
-    ax2.set_xlabel("cam angle [deg]")
-    ax2.set_ylabel("motor torque [N m]")
-    ax2.grid(True, alpha=0.3)
-    ax2.legend(fontsize=7, loc="best")
-    ax2.set_title("torque over the cycle, by term")
+    draw_torque_terms(ax2, 360 * t / design.stroke.period, terms, "torque over the cycle, by term")
     return fig
 
 
