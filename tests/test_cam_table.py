@@ -109,6 +109,12 @@ def test_bad_cam_table_options_exit_2_before_the_solve(capsys, tmp_path, argv, w
     assert not (tmp_path / "o" / "design.json").exists()
 
 
+def test_cam_table_options_without_out_are_refused(capsys):
+    code = main(["solve", str(REFERENCE), "--plot", "none", "--master-unit", "counts"])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "give --out DIR" in err
+
+
 def test_resolution_out_of_range_names_the_option():
     with pytest.raises(ProblemError, match="--cam-table-resolution"):
         parse_cam_resolution("0.0001")

@@ -343,6 +343,9 @@ def _cam_spec(args):
     from ..io.ranges import check_master_counts, parse_cam_resolution
 
     spec = CamTableSpec(parse_cam_resolution(args.cam_table_resolution), args.master_unit, args.master_counts)
+    if args.out is None and spec != CamTableSpec():
+        raise ProblemError("--cam-table-resolution", "", "the cam table options shape the cam table of --out DIR: "
+                                                         "give --out DIR (or omit them)")
     if args.master_unit == "counts":
         check_master_counts(args.master_counts, spec.points)
     return spec
