@@ -57,10 +57,12 @@ def test_text_report_and_out_dir(capsys, tmp_path):
     assert "active constraints: jerk bound move 1" in text
     assert "modified_sine (chi = 0.095)" in text  # the comparison with the file's law
     # the figure once, where --plot says (not also into --out)
-    assert sorted(f.name for f in out.iterdir()) == ["cam_table.csv", "design.json"]
+    assert sorted(f.name for f in out.iterdir()) == ["cam_table.csv", "cam_table.txt", "design.json", "report.html"]
     assert (tmp_path / "f.png").is_file()
-    header = (out / "cam_table.csv").read_text().splitlines()[0]
-    assert header == "cam_angle_deg,position_mm,velocity_m_s,acceleration_m_s2,motor_angle_deg"
+    # the column names follow the '#' lines stating the cycle, master, motor, pulley and units
+    header = [line for line in (out / "cam_table.csv").read_text().splitlines() if not line.startswith("#")][0]
+    assert header == ("cam_angle_deg,position_mm,velocity_m_s,acceleration_m_s2,jerk_m_s3,motor_angle_deg,"
+                      "motor_speed_rpm")  # no motor in this problem: no torque column
     # design.json: stroke_mm >= 0 with a direction, and the stroke rebuilt from it goes up then back down
     data, stroke = read_design(out / "design.json")
     assert [(m["stroke_mm"], m["direction"]) for m in data["moves"]] == [(1000, "up"), (1000, "down")]

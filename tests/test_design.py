@@ -191,10 +191,12 @@ def test_design_json_round_trip(thesis_drive_600, tmp_path):
     assert len(data["cam_table"]["rows"]) == 3600  # 0.1 deg master resolution (sources A.5)
     t = np.linspace(0, stroke.period, 997)
     assert stroke.evaluate(t).s == pytest.approx(design.stroke.evaluate(t).s, abs=1e-12)
-    table = np.loadtxt(paths[1], delimiter=",", skiprows=1)
-    assert table.shape == (3600, 5)
+    # the '#' lines state units, cycle, motor and pulley; then the column names and the numbers
+    lines = [line for line in paths[1].read_text().splitlines() if not line.startswith("#")]
+    table = np.loadtxt(lines, delimiter=",", skiprows=1)
+    assert table.shape == (3600, 8)  # master, position, velocity, acceleration, jerk, motor angle, speed, torque
     # motor angle = position / pulley radius
-    assert np.radians(table[:, 4]) == pytest.approx(table[:, 1] * 1e-3 / design.radius, rel=1e-5, abs=1e-6)
+    assert np.radians(table[:, 5]) == pytest.approx(table[:, 1] * 1e-3 / design.radius, rel=1e-5, abs=1e-6)
     json.loads((tmp_path / "design.json").read_text())  # valid JSON, no NaN
 
 

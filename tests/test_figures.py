@@ -49,7 +49,7 @@ def test_solve_writes_its_figure_once_with_the_torque_speed_path(capsys, referen
     assert main(["solve", str(reference_path), "--spm", "600", "--out", "out"]) == 0
     name = f"{STEM}_solve_600spm_min_peak_torque.png"
     # with --out the figure goes beside design.json, and nowhere else
-    assert sorted(f.name for f in (tmp_path / "out").iterdir()) == sorted(["cam_table.csv", "design.json", name])
+    assert sorted(f.name for f in (tmp_path / "out").iterdir()) == sorted(["cam_table.csv", "cam_table.txt", "design.json", "report.html", name])
     assert not (tmp_path / "strokeopt-out").exists()
     assert main(["solve", str(reference_path), "--spm", "600", "--objective", "min_rms_torque"]) == 0
     assert [f.name for f in (tmp_path / "strokeopt-out").iterdir()] == [f"{STEM}_solve_600spm_min_rms_torque.png"]

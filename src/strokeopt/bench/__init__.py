@@ -1,6 +1,6 @@
 """``strokeopt bench``: speed measurements, each beside a reference measured in the same run.
 
 ``registry`` holds the machinery (``@benchmark``, ``best_time``); one module per area registers
-its benchmarks (``sizing``, ``design``, ``contact``); ``run`` imports them and runs them. The
+its benchmarks (``sizing``, ``design``, ``contact``, ``servo``, ``report``); ``run`` imports them and runs them. The
 domain packages never import this package.
 """

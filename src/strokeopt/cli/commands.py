@@ -320,10 +320,39 @@ def _objective(args, problem) -> str | None:
     return args.objective or (problem.design.objective if problem.design else None)
 
 
-def cmd_solve(args) -> int:
+def solve_once(args, problem, progress=None):
+    """One design solve as ``strokeopt solve`` makes it: the design (with the full servo simulation's
+    handover check), its comparison with the classic laws, and the drive it used (``solve --json``)."""
     from ..design.compare import compare_with_laws
-    from ..design.objectives import OBJECTIVES
     from ..design.solve import solve_design
+
+    design = solve_design(problem, objective=args.objective, verbose=getattr(args, "verbose", False),
+                          progress=progress and (lambda it: progress(it, "motors")),
+                          handover_check=_servo_handover_check(problem))
+    comparison = compare_with_laws(design)
+    chosen = drive_used(args, problem, design.motor, design.pulley_teeth)
+    if problem.design is not None and (problem.design.motor_choice != "fixed" or problem.design.pulley != "fixed"):
+        chosen["from"] = (f"the solve's choice: design.motor_choice = {problem.design.motor_choice}, design.pulley "
+                          f"= {problem.design.pulley}")
+    return design, comparison, chosen
+
+
+def _cam_spec(args):
+    """The cam table of ``solve --out`` as its options ask (checked before the solve)."""
+    from ..io.design_file import CamTableSpec
+    from ..io.ranges import check_master_counts, parse_cam_resolution
+
+    spec = CamTableSpec(parse_cam_resolution(args.cam_table_resolution), args.master_unit, args.master_counts)
+    if args.out is None and spec != CamTableSpec():
+        raise ProblemError("--cam-table-resolution", "", "the cam table options shape the cam table of --out DIR: "
+                                                         "give --out DIR (or omit them)")
+    if args.master_unit == "counts":
+        check_master_counts(args.master_counts, spec.points)
+    return spec
+
+
+def cmd_solve(args) -> int:
+    from ..design.objectives import OBJECTIVES
     from ..design.studies import fastest_feasible, mesh_study, sweep_design
     from ..report.design import design_summary, design_text, plot_design, plot_design_sweep, plot_mesh_study
     from ..report.format import drive_text, format_table, to_json
@@ -337,6 +366,7 @@ def cmd_solve(args) -> int:
     if args.objective is not None and args.objective not in OBJECTIVES:
         raise ProblemError("--objective", "", f"{args.objective!r} is not one of {', '.join(OBJECTIVES)}")
     problem = _load(args, fix_in_design=True)  # (an unwritable --out was refused before: cli.common.check_outputs)
+    cam_spec = _cam_spec(args)
     progress = progress_bar(args, "solve", "solve")
     if args.study == "mesh":
         rows = mesh_study(problem, objective=args.objective, progress=progress and (lambda it: progress(it, "mesh")))
@@ -378,22 +408,20 @@ def cmd_solve(args) -> int:
                   file=sys.stderr)
             return 1
         return 0
-    design = solve_design(problem, objective=args.objective, verbose=args.verbose,
-                          progress=progress and (lambda it: progress(it, "motors")),
-                          handover_check=_servo_handover_check(problem))
-    comparison = compare_with_laws(design)
-    chosen = drive_used(args, problem, design.motor, design.pulley_teeth)
-    if problem.design is not None and (problem.design.motor_choice != "fixed" or problem.design.pulley != "fixed"):
-        chosen["from"] = (f"the solve's choice: design.motor_choice = {problem.design.motor_choice}, design.pulley "
-                          f"= {problem.design.pulley}")
+    design, comparison, chosen = solve_once(args, problem, progress)
     if args.json:
         _emit(to_json({**design_summary(design), "drive": chosen, "comparison": comparison}))
     else:
         print(design_text(design, comparison))
         print(drive_text(chosen))
     if args.out is not None:
-        for path in design.write(args.out):
+        for path in design.write(args.out, spec=cam_spec, extra={"comparison": comparison, "drive": chosen}):
             print(f"written {path}", file=sys.stderr if args.json else sys.stdout)
+        from ..report.design_report import gather, write_report
+
+        summary = {**design_summary(design), "drive": chosen, "comparison": comparison}
+        info = write_report(gather(problem, design, summary), Path(args.out) / "report.html")  # `strokeopt report`
+        print(f"written {info['report']}", file=sys.stderr if args.json else sys.stdout)
     # one figure: --plot FILE, else into --out DIR beside design.json, else strokeopt-out/
     fig_path = _plot_path(args, "solve", spm_tag(design.spm), design.objective)
     if fig_path is not None and args.plot is None and args.out is not None:

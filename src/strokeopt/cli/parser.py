@@ -55,10 +55,26 @@ def _plot_option(p: argparse.ArgumentParser, name: str) -> None:
 
 def _simulation_arguments(p) -> None:
     p.add_argument("--scene", help="scene of the problem file ([scenes.NAME]; default: release, else the first)")
+    _integrator_arguments(p)
+
+
+def _integrator_arguments(p) -> None:
+    """The contact model's integrator: --method, --rtol, --atol."""
     p.add_argument("--method", default="cvodes", choices=("cvodes", "idas"), help="SUNDIALS integrator (default cvodes)")
     p.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance (default 1e-5: impact velocity to ~1e-4 m/s)")
     p.add_argument("--atol", type=float, default=1e-6,
                    help="absolute tolerance in scaled states: positions in mm, velocities in m/s (default 1e-6)")
+
+
+def _cam_table_options(p: argparse.ArgumentParser) -> None:
+    """How the cam table of ``solve --out`` samples the cycle (io/design_file.CamTableSpec)."""
+    p.add_argument("--cam-table-resolution", metavar="DEG|N/cycle", default="0.1",
+                   help="cam table step: degrees of the master axis per point (0.1 or 0.1deg; default 0.1, the "
+                        "thesis drive's 3600 positions per revolution) or points per cam cycle (720/cycle)")
+    p.add_argument("--master-unit", choices=("deg", "counts"), default="deg",
+                   help="the cam table's master column: cam angle in deg (default) or master axis counts")
+    p.add_argument("--master-counts", type=int, default=3600, metavar="N",
+                   help="master axis counts per cam cycle with --master-unit counts (default 3600)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -143,8 +159,10 @@ def build_parser() -> argparse.ArgumentParser:
     _drive_options(p, "the solve re-solves the stroke at that rate on that drive. --motor/--pulley-teeth fix the "
                       "motor/pulley (the same as --set design.motor_choice='\"fixed\"' / design.pulley='\"fixed\"')")
     _verbose_option(p, "IPOPT's (and Bonmin's) output of the solve")
-    p.add_argument("--out", metavar="DIR", help="write design.json and cam_table.csv (0.1 deg) into DIR, and the "
-                                                "figure too unless --plot or --json says otherwise")
+    p.add_argument("--out", metavar="DIR", help="write design.json, the cam table (cam_table.csv, cam_table.txt) "
+                                                "and the design report (report.html) into DIR, and the figure too "
+                                                "unless --plot or --json says otherwise")
+    _cam_table_options(p)
     p.add_argument("--study", choices=("mesh",), help="'mesh': objective error, violation between nodes and time "
                                                       "over mesh sizes and collocation degrees")
     _plot_option(p, "solve_<spm>spm_<objective>")
@@ -240,4 +258,53 @@ def build_parser() -> argparse.ArgumentParser:
     _drive_options(p, "(its motor and pulley only: the stroke is solved again at every rate)")
     _plot_option(p, "tradeoff_<strokes>_<law>_<motor>")
     p.set_defaults(run=cmd_tradeoff)
+    _report_parsers(sub, problem)
     return parser
+
+
+def _report_parsers(sub, problem) -> None:
+    """``report`` and ``compare``: HTML files of designs (cli/report_commands.py)."""
+    from .report_commands import cmd_compare, cmd_report
+
+    p = sub.add_parser("report", parents=[problem], help="one self-contained HTML design report (print it, hand it over)",
+                       description="Write the design report of a design: one HTML file, every figure inlined, no "
+                                   "script or external resource, printable (a page per section). Sections in the "
+                                   "order of the data flow: problem and timing diagram; stroke of bar and motor with "
+                                   "the classic-law comparison; drive (torque-speed path over the motor's curves, "
+                                   "checks with margins, the binding limit); handover accuracy (servo, belt, "
+                                   "encoder); contact-model verification per scene; numerical accuracy; the inputs "
+                                   "(the problem as resolved with every --set) and versions. Without --design the "
+                                   "design is solved first, as 'strokeopt solve' does; 'solve --out DIR' writes "
+                                   "DIR/report.html too.",
+                       epilog="Examples: strokeopt report problems/deco2000_needle_bar.toml --out report.html; "
+                              "strokeopt solve problems/deco2000_needle_bar.toml --spm 600 --out out && strokeopt "
+                              "report problems/deco2000_needle_bar.toml --design out/design.json --out "
+                              "out/report.html --scene all")
+    p.add_argument("--out", dest="html", required=True, metavar="FILE.html", help="the report file to write")
+    p.add_argument("--objective", help="objective of the solve (without --design; overrides design.objective)")
+    _stroke_options(p, law=False)
+    _drive_options(p, "the report shows that design (its numbers as the file holds them) instead of solving")
+    p.add_argument("--scene", action="append", metavar="NAME",
+                   help="contact scene to verify (repeatable; 'all': every scene; default: release, else the "
+                        "first: the others can take seconds each)")
+    _integrator_arguments(p)
+    p.set_defaults(run=cmd_report, plot=None, verbose=False)
+
+    p = sub.add_parser("compare", help="designs side by side in one HTML file (overlaid curves, a column per design)",
+                       description="Compare two or more designs (design.json files of 'strokeopt solve --out'): the "
+                                   "design report's sections with the designs side by side: their strokes and "
+                                   "torques overlaid, the torque-speed paths over the motor's curves, and one table "
+                                   "per section with a column per design, the better value of each row marked "
+                                   "(lower torque, jerk, error; larger margin). Each design is read with the problem "
+                                   "file and --set texts it records.",
+                       epilog="Example: strokeopt solve problems/deco2000_needle_bar.toml --spm 600 --out peak && "
+                              "strokeopt solve problems/deco2000_needle_bar.toml --spm 600 --objective "
+                              "min_rms_torque --out rms && strokeopt compare peak/design.json rms/design.json "
+                              "--out compare.html")
+    p.add_argument("designs", nargs="+", metavar="DESIGN.json", help="two or more design files")
+    p.add_argument("--out", dest="html", required=True, metavar="FILE.html", help="the comparison file to write")
+    p.add_argument("--scene", action="append", metavar="NAME",
+                   help="contact scene to verify for each design (repeatable; 'all'; default: release, else the first)")
+    _integrator_arguments(p)
+    p.add_argument("--json", action="store_true", help="print only JSON on stdout (for scripts)")
+    p.set_defaults(run=cmd_compare, plot=None, verbose=False)

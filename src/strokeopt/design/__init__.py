@@ -14,7 +14,8 @@ diagnose      why a solve is infeasible (relaxed NLP)
 refine        solve_one: pinned points, lazy accuracy, mesh refinement
 parts         motor and pulley search
 solve         solve_design
-result        Design, MoveResult, stroke_from_solutions
+result        Design, MoveResult, stroke_from_solutions, design_from_data (a design.json read back)
+torque        design_torque: the motor torque of a design on its own motor and pulley
 compare       compare_with_laws
 studies       sweep_design, fastest_feasible, mesh_study
 

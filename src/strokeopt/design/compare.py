@@ -12,10 +12,10 @@ import math
 import numpy as np
 
 from .limits import ENFORCED_CHECKS
-from .request import DriveSetup, design_moves
+from .request import design_moves
 from .result import Design
+from .torque import design_drive as _design_drive
 from .settings import DesignSettings
-from ..drive.transmission import BeltPulley
 from ..motion.laws import make_law
 from ..motion.stroke import StrokeFunction
 
@@ -58,26 +58,6 @@ def _stroke_measures(design: Design, stroke: StrokeFunction, samples: int = 20_0
                    energy=float(np.sum(tau[moving] ** 2) * dt),
                    peak_speed_rpm=checks["peak_speed"])
     return row
-
-
-def _design_drive(design: Design):
-    """The drive setup of the design's problem and the transmission of the design's pulley."""
-    drive = DriveSetup(design.problem, getattr(design.problem, "design", None) or DesignSettings())
-    trans = drive.transmission(design.pulley_teeth) if design.pulley_teeth else \
-        BeltPulley(design.pitch_diameter, inertia=float(drive.pulley_inertia(design.pitch_diameter)))
-    return drive, trans
-
-
-def design_torque(design: Design, samples: int = 3601):
-    """The motor torque of the design's stroke over the cycle on its own motor and pulley:
-    ``(t, TorqueTerms)`` (``.omega`` the motor speed, ``.total`` the torque), or None without a drive."""
-    if design.motor_spec is None or design.problem.drive is None:
-        return None
-    from ..drive.load import load_torque
-
-    drive, trans = _design_drive(design)
-    k = design.stroke.sample(samples)
-    return k.t, load_torque(design.motor_spec, trans, drive.load, k.s, k.v, k.a)
 
 
 _MEASURE_OF = {"min_peak_torque": "peak_torque_N_m", "min_rms_torque": "rms_torque_N_m", "min_energy": "energy",

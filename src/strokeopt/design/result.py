@@ -11,6 +11,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from .collocation import Mesh, MoveSolution, move_piece
 from ..motion.stroke import StrokeFunction, dwell_piece
 
@@ -122,9 +124,35 @@ class Design:
         """The value of the check ``name`` (``peak_torque``, ``rms_torque``...), None when not checked."""
         return next((c["value"] for c in self.checks if c["name"] == name), None)
 
-    def write(self, out_dir: str | Path, resolution_deg: float = 0.1) -> list[Path]:
-        """Write ``design.json`` and ``cam_table.csv`` into ``out_dir``; returns the paths
-        (:func:`strokeopt.io.design_file.write_design`)."""
+    def write(self, out_dir: str | Path, resolution_deg: float = 0.1, spec=None, extra: dict | None = None) -> list[Path]:
+        """Write ``design.json``, ``cam_table.csv`` and ``cam_table.txt`` into ``out_dir``; returns the paths
+        (:func:`strokeopt.io.design_file.write_design`; ``spec``: a ``CamTableSpec``, resolution and master unit)."""
         from ..io.design_file import write_design
 
-        return write_design(self, out_dir, resolution_deg)
+        return write_design(self, out_dir, resolution_deg, spec, extra)
+
+
+def design_from_data(problem, data: dict, stroke: StrokeFunction) -> Design:
+    """The :class:`Design` a ``design.json`` holds (``data`` and ``stroke`` as
+    :func:`strokeopt.io.design_file.read_design` returns them), on ``problem`` (the problem it was
+    solved for, at its stitch rate): its numbers are the file's, its motor the catalogue's."""
+    mesh = Mesh(int(data["mesh"]["intervals"]), int(data["mesh"]["degree"]))
+    moves = []
+    for m in data["moves"]:
+        u = m["unit_solution"]
+        sign = -1.0 if m.get("direction") == "down" else 1.0
+        solution = MoveSolution(mesh, *(np.asarray(u[k], float) for k in ("S", "V", "A")))
+        moves.append(MoveResult(m["index"], m["interval"], m["name"], m["t_start_s"], m["duration_s"],
+                                m["start_position_mm"] * 1e-3, sign * m["stroke_mm"] * 1e-3, solution,
+                                m["v_max_m_s"], m["a_max_m_s2"], m["jerk_max_m_s3"], m["C_a"]))
+    pd = data.get("pulley_pitch_diameter_mm")
+    design = Design(problem, float(data["spm"]), data["objective"], data["objective_value"], data["objective_unit"],
+                    stroke, moves, mesh, data["status"], data["solve_time_s"], data.get("iterations", 0),
+                    checks=list(data.get("checks", [])), active_constraints=list(data.get("active_constraints", [])),
+                    fine_grid=dict(data.get("fine_grid", {})), pulley_teeth=data.get("pulley_teeth"),
+                    pitch_diameter=None if pd is None else pd * 1e-3, motor=data.get("motor"),
+                    notes=list(data.get("notes", [])))
+    if design.motor is not None and getattr(problem, "drive", None) is not None:
+        design.motor_spec = problem.drive.catalogue().motor(design.motor, (str(problem.file), "drive.motor"))
+    design.settings = getattr(problem, "design", None)
+    return design

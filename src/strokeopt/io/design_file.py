@@ -1,4 +1,4 @@
-"""Design files: ``design.json`` and ``cam_table.csv`` of a :class:`~strokeopt.design.result.Design`.
+"""Design files: ``design.json``, ``cam_table.csv`` and ``cam_table.txt`` of a :class:`~strokeopt.design.result.Design`.
 
 ``design.json`` (written by :func:`write_design`, which :meth:`Design.write` calls, read by
 :func:`read_design` and by ``strokeopt verify``)::
@@ -18,8 +18,11 @@
                      "t_start_s": ..., "duration_s": ..., "position_mm": ...}],
       "checks": [{"name": ..., "value": ..., "limit": ..., "unit": ..., "margin": ..., "ok": ...}],
       "active_constraints": [...], "solve_time_s": ...,
-      "cam_table": {"resolution_deg": 0.1, "columns": ["cam_angle_deg", "position_mm",
-                    "velocity_m_s", "acceleration_m_s2", "motor_angle_deg"], "rows": [[...], ...]}
+      "comparison": [...], "drive": {...},   (written by ``strokeopt solve --out``: as ``solve --json`` prints them)
+      "cam_table": {"resolution_deg": 0.1, "master_unit": "deg", "master_counts": null,
+                    "columns": ["cam_angle_deg", "position_mm", "velocity_m_s", "acceleration_m_s2",
+                                "jerk_m_s3", "motor_angle_deg", "motor_speed_rpm", "motor_torque_N_m"],
+                    "rows": [[...], ...]}
     }
 
 ``unit_solution`` is the collocation solution of a move in unit form
@@ -33,61 +36,158 @@ from __future__ import annotations
 
 import json
 import os
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..design.collocation import Mesh, MoveSolution, move_piece
-from ..errors import ProblemError
+from ..errors import ProblemError, SolverError
 from ..problem import SPM_RANGE
 from .fields import Fields
 from .plain import to_json
 from ..motion.stroke import StrokeFunction, dwell_piece
 
 
-def cam_table(design, resolution_deg: float = 0.1) -> dict[str, np.ndarray]:
-    """The stroke sampled at every ``resolution_deg`` of cam angle (the drive's master resolution).
+#: The master axis of the drive: 3600 positions per cam revolution (sources A.5: 0.1 deg).
+MASTER_COUNTS = 3600
 
-    Columns: cam angle [deg], position [mm], velocity [m/s], acceleration [m/s^2], motor angle [deg]
-    (position over the pulley radius; 0 at the 0 mm position).
+
+@dataclass(frozen=True)
+class CamTableSpec:
+    """How the cam table samples the cycle: every ``resolution_deg`` of the master axis (one cam cycle =
+    360 deg), the master column in ``master_unit`` ``"deg"`` or ``"counts"`` (``master_counts`` per cycle)."""
+
+    resolution_deg: float = 0.1
+    master_unit: str = "deg"
+    master_counts: int = MASTER_COUNTS
+
+    @property
+    def points(self) -> int:
+        return int(round(360.0 / self.resolution_deg))
+
+    @property
+    def master_column(self) -> str:
+        return "cam_angle_deg" if self.master_unit == "deg" else "master_counts"
+
+
+#: The cam table's columns after the master column: (name, unit, what), the unit also in the name.
+CAM_COLUMNS = [("position_mm", "mm", "bar position (problem frame, + up)"),
+               ("velocity_m_s", "m/s", "bar velocity"), ("acceleration_m_s2", "m/s^2", "bar acceleration"),
+               ("jerk_m_s3", "m/s^3", "bar jerk"),
+               ("motor_angle_deg", "deg", "motor angle = position / pulley pitch radius (0 at 0 mm)"),
+               ("motor_speed_rpm", "rpm", "motor speed"),
+               ("motor_torque_N_m", "N m", "motor torque on the design's motor and pulley (rigid load model)")]
+_CAM_FORMATS = {"cam_angle_deg": "%.4f", "master_counts": "%.0f", "position_mm": "%.6f", "velocity_m_s": "%.6f",
+                "acceleration_m_s2": "%.4f", "jerk_m_s3": "%.2f", "motor_angle_deg": "%.5f",
+                "motor_speed_rpm": "%.3f", "motor_torque_N_m": "%.5f"}
+
+
+def cam_table(design, resolution_deg: float = 0.1, spec: CamTableSpec | None = None) -> dict[str, np.ndarray]:
+    """The stroke sampled at every ``resolution_deg`` of cam angle (the drive's master resolution), or as
+    ``spec`` says (:class:`CamTableSpec`: resolution and master unit).
+
+    Columns: the master (cam angle [deg] or master counts), then :data:`CAM_COLUMNS`: bar position [mm],
+    velocity [m/s], acceleration [m/s^2], jerk [m/s^3], motor angle [deg] (position over the pulley
+    radius; 0 at the 0 mm position), motor speed [rpm] and, with a motor, motor torque [N m].
     """
-    n = int(round(360.0 / resolution_deg))
-    angle = np.arange(n) * resolution_deg
-    k = design.stroke.evaluate(angle / 360.0 * design.stroke.period)
+    from ..design.torque import design_torque
+
+    spec = spec or CamTableSpec(resolution_deg)
+    n = spec.points
+    angle = np.arange(n) * (360.0 / n)
+    t = angle / 360.0 * design.stroke.period
+    k = design.stroke.evaluate(t)
     r = design.radius if design.radius else design.problem.transmission.radius
-    return {"cam_angle_deg": angle, "position_mm": k.s * 1e3, "velocity_m_s": k.v,
-            "acceleration_m_s2": k.a, "motor_angle_deg": np.degrees(k.s / r)}
+    master = angle if spec.master_unit == "deg" else np.arange(n) * (spec.master_counts / n)
+    out = {spec.master_column: master, "position_mm": k.s * 1e3, "velocity_m_s": k.v,
+           "acceleration_m_s2": k.a, "jerk_m_s3": k.j, "motor_angle_deg": np.degrees(k.s / r),
+           "motor_speed_rpm": k.v / r * 60.0 / (2 * np.pi)}
+    torque = design_torque(design, t=t)
+    if torque is not None:
+        out["motor_torque_N_m"] = torque[1].total
+    for name, col in out.items():
+        if not np.all(np.isfinite(col)):
+            raise SolverError(f"cam table column {name} is not finite: refusing to write it")
+    return out
 
 
-def design_json(design, resolution_deg: float = 0.1) -> dict:
-    """The data of ``design.json`` (see the module docstring)."""
+def cam_table_header(design, spec: CamTableSpec) -> list[str]:
+    """The lines that state what a cam table is: problem, cycle, master axis, motor, pulley, units."""
+    stitch = 60.0 / design.spm
+    cycle = design.stroke.period
+    pulley = (f"{design.pulley_teeth}-tooth pulley" if design.pulley_teeth else "continuous pulley radius")
+    pd = 2 * (design.radius if design.radius else design.problem.transmission.radius) * 1e3
+    master = (f"cam angle [deg], 0-360 per cam cycle" if spec.master_unit == "deg"
+              else f"master counts, {spec.master_counts} per cam cycle")
+    return [f"strokeopt cam table: {design.problem.name}, {design.objective} design at {design.spm:g} spm",
+            f"cycle: one cam cycle = {cycle * 1e3:.4f} ms = {cycle / stitch:g} stitches of {stitch * 1e3:.4f} ms",
+            f"master: {master}; {spec.points} points, one every {spec.resolution_deg:g} deg",
+            f"motor: {design.motor or '(none)'}; pulley: {pulley}, pitch diameter {pd:.4f} mm"]
+
+
+def design_json(design, resolution_deg: float = 0.1, spec: CamTableSpec | None = None,
+                extra: dict | None = None) -> dict:
+    """The data of ``design.json`` (see the module docstring); ``extra``: more fields of the solve's report
+    (its ``comparison`` with the classic laws and the ``drive`` it used), stored as they are."""
+    spec = spec or CamTableSpec(resolution_deg)
     sch = design.problem.timing.schedule(design.spm)
-    out = {"format": "strokeopt-design", "version": 1, **design.summary()}
+    out = {"format": "strokeopt-design", "version": 1, **design.summary(), **(extra or {})}
     out["moves"] = [{**m.to_dict(), "unit_solution": {"S": m.solution.S.tolist(), "V": m.solution.V.tolist(),
                                                       "A": m.solution.A.tolist()}} for m in design.moves]
     out["intervals"] = [{"index": itv.index, "name": itv.name, "kind": "move" if itv.is_move else "dwell",
                          "t_start_s": float(t0), "duration_s": float(dur), "position_mm": itv.start_position * 1e3}
                         for itv, t0, dur in zip(design.problem.timing.intervals, sch.t_start, sch.duration)]
-    table = cam_table(design, resolution_deg)
+    table = cam_table(design, spec=spec)
     cols = list(table)
-    out["cam_table"] = {"resolution_deg": resolution_deg, "columns": cols,
-                        "rows": np.column_stack([table[c] for c in cols]).tolist()}
+    out["cam_table"] = {"resolution_deg": spec.resolution_deg, "master_unit": spec.master_unit,
+                        "master_counts": spec.master_counts if spec.master_unit == "counts" else None,
+                        "columns": cols, "rows": np.column_stack([table[c] for c in cols]).tolist()}
     return out
 
 
-def write_design(design, out_dir: str | Path, resolution_deg: float = 0.1) -> list[Path]:
-    """Write ``design.json`` and ``cam_table.csv`` into ``out_dir``; returns the paths."""
+def write_cam_table(design, out_dir: str | Path, spec: CamTableSpec | None = None) -> list[Path]:
+    """Write ``cam_table.csv`` (every column; ``#`` lines stating the cycle, the master axis, the motor,
+    the pulley and every column's unit, then the column names) and ``cam_table.txt`` into ``out_dir``.
+
+    ``cam_table.txt`` is the plain ASCII point table the Lenze Global Drive Cam Loader imports (a
+    ``.txt`` file): one point per line, master position and slave position (the motor angle [deg]) in
+    fixed-width columns separated by blanks, the master ascending, a comment only after the data
+    behind ``//`` (the first line's says what the columns are).
+    """
+    spec = spec or CamTableSpec()
+    out = Path(out_dir)
+    table = cam_table(design, spec=spec)
+    units = {name: unit for name, unit, _ in CAM_COLUMNS}
+    units[spec.master_column] = "deg" if spec.master_unit == "deg" else "counts"
+    what = {name: text for name, _, text in CAM_COLUMNS}
+    what[spec.master_column] = "master axis"
+    header = [f"# {line}" for line in cam_table_header(design, spec)]
+    header += [f"# column {c} [{units[c]}]: {what[c]}" for c in table]
+    p_csv = out / "cam_table.csv"
+    np.savetxt(p_csv, np.column_stack(list(table.values())), delimiter=",",
+               header="\n".join(header) + "\n" + ",".join(table), comments="",
+               fmt=[_CAM_FORMATS[c] for c in table])
+    p_txt = out / "cam_table.txt"
+    master, slave = table[spec.master_column], table["motor_angle_deg"]
+    mfmt = "{:12.0f}" if spec.master_unit == "counts" else "{:12.4f}"
+    lines = [f"{mfmt.format(m)} {s:14.5f}" for m, s in zip(master, slave)]
+    lines[0] += (f" // strokeopt {design.problem.name} at {design.spm:g} spm: master {units[spec.master_column]}"
+                 f" ({spec.points} points per cam cycle), slave motor angle deg")
+    p_txt.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return [p_csv, p_txt]
+
+
+def write_design(design, out_dir: str | Path, resolution_deg: float = 0.1, spec: CamTableSpec | None = None,
+                 extra: dict | None = None) -> list[Path]:
+    """Write ``design.json`` and the cam table (:func:`write_cam_table`) into ``out_dir``; returns the paths."""
+    spec = spec or CamTableSpec(resolution_deg)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    data = design_json(design, resolution_deg)
+    data = design_json(design, spec=spec, extra=extra)
     p_json = out / "design.json"
     p_json.write_text(to_json(data) + "\n", encoding="utf-8")
-    p_csv = out / "cam_table.csv"
-    table = cam_table(design, resolution_deg)
-    header = ",".join(table)
-    np.savetxt(p_csv, np.column_stack(list(table.values())), delimiter=",", header=header, comments="",
-               fmt=["%.1f", "%.6f", "%.6f", "%.4f", "%.5f"])
-    return [p_json, p_csv]
+    return [p_json, *write_cam_table(design, out, spec)]
 
 
 def check_out_dir(path: str | Path, option: str = "--out") -> Path:

@@ -3,4 +3,6 @@
 * format.py   plain-text tables (JSON and the number format come from :mod:`strokeopt.io.plain`)
 * figures.py  what every figure shares
 * motion.py, drive.py, design.py, contact.py, servo.py  one module per area, in data-flow order
+* html.py     one self-contained HTML page (sections, tables with data-key/data-value, inline SVG, print CSS)
+* design_report.py, compare_report.py  the HTML design report of a design and the comparison of designs
 """

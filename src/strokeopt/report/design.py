@@ -42,7 +42,7 @@ def plot_design(design: Design, law_stroke=None, path=None):
     with a drive, the design's torque-speed path over the cycle with its peak and RMS operating
     points over its motor's peak, rated and drive-limit curves."""
     import matplotlib.pyplot as plt
-    from ..design.compare import design_torque
+    from ..design.torque import design_torque
     from .drive import draw_torque_speed
     from .motion import draw_kinematics
 

@@ -129,6 +129,27 @@ def draw_torque_speed(ax, motor, omega, torque, t, limits, title: str) -> None:
     ax.legend(fontsize=7, loc="best")
 
 
+def torque_angle_axis(ax, title: str, fontsize: int = 8) -> None:
+    """An axis of motor torque over the cam angle (one cycle, 45 deg ticks), its legend and title."""
+    ax.set_xlabel("cam angle [deg]")
+    ax.set_ylabel("motor torque [N m]")
+    ax.set_xlim(0, 360)
+    ax.set_xticks(np.arange(0, 361, 45))
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=fontsize, loc="best")
+    ax.set_title(title)
+
+
+def draw_torque_terms(ax, angle, terms, title: str) -> None:
+    """The motor torque over the cam angle, its total and every term that is not zero (TorqueTerms)."""
+    ax.plot(angle, terms.total, color="k", lw=1.5, label="total")
+    for name, val in terms.as_dict().items():
+        val = np.broadcast_to(val, angle.shape)
+        if np.max(np.abs(val)) > 1e-9:
+            ax.plot(angle, val, lw=0.9, label=name, ls="--" if name == "rotor_inertia" else "-")
+    torque_angle_axis(ax, title)
+
+
 def plot_sizing(sizing, candidate=None, path=None):
     """The classic sizing picture for ``candidate`` (default: the best ranked):
     the cycle's torque-speed trajectory over the motor's continuous and peak
@@ -140,19 +161,8 @@ def plot_sizing(sizing, candidate=None, path=None):
     m = c.motor
     draw_torque_speed(ax1, m, terms.omega, terms.total, sizing.kinematics.t, sizing.limits,
                       f"{m.name}, pulley z{c.pulley.teeth}, {sizing.spm:g} spm, {sizing.inputs['law']}")
-    angle = 360.0 * sizing.kinematics.t / sizing.period
-    ax2.plot(angle, terms.total, color="k", lw=1.5, label="total")
-    for name, val in terms.as_dict().items():
-        val = np.broadcast_to(val, angle.shape)
-        if np.max(np.abs(val)) > 1e-9:
-            ax2.plot(angle, val, lw=0.9, label=name, ls="--" if name == "rotor_inertia" else "-")
-    ax2.set_xlabel("cam angle [deg]")
-    ax2.set_ylabel("motor torque [N m]")
-    ax2.set_xlim(0, 360)
-    ax2.set_xticks(np.arange(0, 361, 45))
-    ax2.grid(True, alpha=0.3)
-    ax2.legend(fontsize=8, loc="best")
-    ax2.set_title(f"torque over the cycle (binding: {c.binding})")
+    draw_torque_terms(ax2, 360.0 * sizing.kinematics.t / sizing.period, terms,
+                      f"torque over the cycle (binding: {c.binding})")
     if path is not None:
         fig.savefig(path, dpi=110)
         plt.close(fig)

@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Make docs/report-example.pdf and docs/report-example.png (its first page) from the reference design:
+# `strokeopt solve --out` writes the design report, headless Chromium (Debian: apt-get install chromium)
+# prints it to PDF and takes a screenshot of its first page.
+#   scripts/render_report.sh                      # python3 and chromium from PATH
+#   PYTHON=/path/to/python CHROMIUM=/usr/bin/chromium scripts/render_report.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+PYTHON=${PYTHON:-python3}
+CHROMIUM=${CHROMIUM:-chromium}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+PYTHONPATH="$PWD/src${PYTHONPATH:+:$PYTHONPATH}" "$PYTHON" -m strokeopt solve problems/deco2000_needle_bar.toml \
+    --out "$work/out" --plot none
+flags=(--headless --no-sandbox --disable-gpu --disable-quic --no-first-run --disable-background-networking
+       --disable-component-update --disable-sync --user-data-dir="$work/profile")
+url="file://$work/out/report.html"
+"$CHROMIUM" "${flags[@]}" --no-pdf-header-footer --print-to-pdf="$PWD/docs/report-example.pdf" "$url" 2>"$work/pdf.log" \
+    || { cat "$work/pdf.log" >&2; exit 1; }
+# the first A4 page at 96 dpi (794 x 1123 px) at twice the pixel density
+"$CHROMIUM" "${flags[@]}" --window-size=794,1123 --force-device-scale-factor=1.5 --hide-scrollbars \
+    --screenshot="$PWD/docs/report-example.png" "$url" 2>"$work/png.log" || { cat "$work/png.log" >&2; exit 1; }
+cp "$work/out/report.html" docs/report-example.html
+ls -l docs/report-example.pdf docs/report-example.png docs/report-example.html

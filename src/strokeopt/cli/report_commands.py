@@ -1,0 +1,116 @@
+"""``strokeopt report`` and ``strokeopt compare``: a design, or several side by side, as one HTML file."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from ..errors import ProblemError
+from .common import _emit, _load, _probe_dir, drive_used, progress_bar
+from .commands import _sim_options, solve_once
+
+
+def _html_path(path: str) -> Path:
+    """The --out FILE of a report: an .html file whose directory can be written (checked before any work)."""
+    out = Path(path)
+    if out.is_dir():
+        raise ProblemError("--out", "", f"{path!r} is a directory: give a file name such as "
+                                        f"{str(out / 'report.html')!r}")
+    if out.suffix.lower() not in (".html", ".htm"):
+        raise ProblemError("--out", "", f"{path!r}: the report is an HTML file, name it .html")
+    _probe_dir(out.absolute().parent, "--out", "the report")
+    return out
+
+
+def _scenes(args, problem) -> list[str] | None:
+    """--scene NAME (repeatable) or --scene all; None: the report's default (release, else the first)."""
+    if not args.scene:
+        return None
+    names = list(problem.scenes or {})
+    if args.scene == ["all"]:
+        return names
+    for name in args.scene:
+        if name not in names:
+            raise ProblemError(str(problem.file), "--scene", f"no scene {name!r}; the problem has: "
+                                                             f"{', '.join(names) or 'none'}")
+    return list(dict.fromkeys(args.scene))
+
+
+def design_of(args, problem):
+    """The design a report shows and the ``solve --json`` report of it: read from --design (the numbers of
+    the file, which ``solve --out`` wrote with its comparison and drive), else solved now."""
+    from ..design.compare import compare_with_laws
+    from ..design.result import design_from_data
+    from ..report.design import design_summary
+
+    data = args.design_data
+    if data is None:
+        design, comparison, chosen = solve_once(args, problem, progress_bar(args, "solve", "solve"))
+        source = "solved now"
+    else:
+        design = design_from_data(problem, data, args.design_stroke)
+        comparison = data.get("comparison") or compare_with_laws(design)
+        chosen = data.get("drive") or drive_used(args, problem, design.motor, design.pulley_teeth)
+        source = f"read from {args.design}"
+    return design, {**design_summary(design), "drive": chosen, "comparison": comparison}, source
+
+
+def cmd_report(args) -> int:
+    from ..report.design_report import gather, write_report
+    from ..report.format import to_json
+
+    out = _html_path(args.html)
+    problem = _load(args, fix_in_design=True)
+    scenes = _scenes(args, problem)
+    design, summary, source = design_of(args, problem)
+    t0 = time.perf_counter()  # the report after the solve: the servo simulation, the scenes, figures and page
+    data = gather(problem, design, summary, scenes, _sim_options(args), source)
+    info = write_report(data, out)
+    info["build_time_s"] = time.perf_counter() - t0
+    info.update(status="ok", scenes=list(data.scenes), design_status=summary["status"])
+    if args.json:
+        _emit(to_json(info))
+    else:
+        print(f"written {out} ({info['size_bytes'] / 1024:.0f} KB, built in {info['build_time_s']:.2f} s; design "
+              f"{source}; scenes simulated: {', '.join(data.scenes) or 'none'})")
+    return 0
+
+
+def _design_file(path: str):
+    """A design file's problem (its file, its --set texts, its stitch rate), the design and its ``solve --json``
+    report as ``solve --out`` stored it."""
+    from ..contact.verify import load_design
+    from ..design.compare import compare_with_laws
+    from ..design.result import design_from_data
+    from ..io.design_file import read_design
+    from ..report.design import design_summary
+
+    data, stroke = read_design(path)
+    problem = load_design(path).problem
+    design = design_from_data(problem, data, stroke)
+    chosen = data.get("drive") or {"motor": design.motor, "pulley_teeth": design.pulley_teeth, "from": str(path)}
+    return problem, design, {**design_summary(design), "drive": chosen,
+                             "comparison": data.get("comparison") or compare_with_laws(design)}
+
+
+def cmd_compare(args) -> int:
+    from ..report.compare_report import write_compare
+    from ..report.design_report import gather
+    from ..report.format import to_json
+
+    out = _html_path(args.html)
+    if len(args.designs) < 2:
+        raise ProblemError("DESIGN.json", "", "compare needs two or more design files")
+    loaded = [_design_file(path) for path in args.designs]  # every file read and checked before any simulation
+    t0 = time.perf_counter()
+    datas = []
+    for path, (problem, design, summary) in zip(args.designs, loaded):
+        datas.append(gather(problem, design, summary, _scenes(args, problem), _sim_options(args), f"read from {path}"))
+    info = write_compare(datas, out)
+    info.update(status="ok", build_time_s=time.perf_counter() - t0, designs=list(args.designs))
+    if args.json:
+        _emit(to_json(info))
+    else:
+        print(f"written {out} ({info['size_bytes'] / 1024:.0f} KB, {len(datas)} designs, built in "
+              f"{info['build_time_s']:.2f} s)")
+    return 0
