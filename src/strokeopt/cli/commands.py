@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ..errors import ProblemError
-from .common import _emit, _load, _plot_path, _write_figure, drive_used, progress_bar, spm_tag
+from .common import _emit, _load, _plot_path, _write_figure, drive_used, progress_bar, spm_tag, step_angle
 
 
 def cmd_laws(args) -> int:
@@ -36,7 +36,7 @@ def cmd_kinematics(args) -> int:
 
     problem = _load(args)
     stroke = args.design_stroke or problem.stroke()
-    summary = kinematics_summary(problem, stroke, problem.spm)
+    summary = kinematics_summary(problem, stroke, problem.spm, step_angle(problem))
     if args.design_stroke is not None:  # the table's law column: the design's stroke, not the file's law
         for row in summary["intervals"] + summary["moves"]:
             if row.get("law") is not None:
