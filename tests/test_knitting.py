@@ -164,3 +164,118 @@ def test_lever_past_80_deg_is_one_line(capsys, tmp_path):
 def test_unknown_member_stage_is_one_line(capsys):
     err = _error(capsys, ["size", str(KNITTING), "--set", 'drive.members[1].stage="screw"'])
     assert "drive.members[1].stage" in err and "nut, lever, sleeve" in err
+
+
+# --------------------------------------------------------------------------- the elastic chain (scene "step")
+
+from strokeopt.contact.chain import chain_results  # noqa: E402
+from strokeopt.contact.simulate import simulate_scene  # noqa: E402
+
+LG2 = [f"model.links.{k}.log_decrement={math.log10(2)!r}" for k in ("c2", "c4", "c6")]
+NO_PLAY = ["model.links.c2.clearance_mm=0", "model.links.c4.clearance_rad=0"]
+
+
+def _chain(sets=(), options=None):
+    problem = load_problem(KNITTING, list(sets))
+    stroke = problem.stroke()
+    result = simulate_scene(problem, "step", options=options)
+    return result, chain_results(problem, result, stroke)
+
+
+@pytest.fixture(scope="module")
+def step_ln2():
+    return _chain()
+
+
+@pytest.fixture(scope="module")
+def step_lg2():
+    return _chain(LG2)
+
+
+def test_the_model_is_the_papers_three_dof_chain(knitting):
+    model, scene = knitting.model, knitting.scenes["step"]
+    assert scene.free_bodies == ("slider", "lever_arm", "cam") and scene.riders == ("lever", "sleeve")  # x2P, phi4P, x6P
+    # damping from the logarithmic decrement ln 2 with the reduced masses at phi = 0 (paper, digest B):
+    # m2* = m2P + I4 mu24^2, I4* = I4P + m6 mu46^2, m6* = m6P
+    m2 = 6e-3 + 28e-7 / 15e-3**2
+    i4 = 54e-7 + 3e-3 * 25e-3**2
+    for link, k, m in (("c2", 1e7, m2), ("c4", 1680.0, i4), ("c6", 1e7, 90e-3)):
+        assert model.links[link].damping == pytest.approx(math.log(2) / math.pi * math.sqrt(k * m), rel=1e-7)
+
+
+def test_cam_acceleration_exceeds_the_rigid_chain_by_half(step_ln2, step_lg2):
+    # paper, digest B: the cam's acceleration exceeds the rigid-body value by more than 50 %
+    for _, chain in (step_ln2, step_lg2):
+        cam = next(b for b in chain["bodies"] if b["body"] == "cam")
+        assert cam["rigid_peak_accel"] == pytest.approx(4 * 0.4e-3 / 6e-3**2, rel=1e-6)  # 4h/T^2 of the ramps
+        assert cam["ratio"] > 1.5
+
+
+def test_screw_torque_of_the_paper(step_ln2, step_lg2):
+    # paper, digest B: screw torque 4.6 N cm with friction 0.15; within 35 % with the stated screw
+    # (Tr 10x2, pitch diameter 9 mm: problems/knitting_stitch_density.toml), both damping readings
+    for _, chain in (step_ln2, step_lg2):
+        assert chain["screw"]["screw_diameter_mm"] == pytest.approx(9.0) and chain["screw"]["thread_friction"] == 0.15
+        assert chain["screw"]["screw_torque_N_cm"] == pytest.approx(4.6, rel=0.35)
+
+
+@pytest.mark.xfail(strict=True, reason="measured 21.7 N (ln 2) and 22.4 N (lg 2), 32 % and 30 % below the paper's "
+                                       "32 N: the paper's clearance law (eqs. 6-7) and eq. 9 are not in the digest")
+def test_peak_cam_force_of_the_paper(step_ln2, step_lg2):
+    # paper, digest B (Fig. 8): peak cam force F6 32 N, within 30 %, with either damping reading
+    for _, chain in (step_ln2, step_lg2):
+        f6 = next(k for k in chain["links"] if k["link"] == "c6")
+        assert f6["peak_abs"] == pytest.approx(32.0, rel=0.30)
+
+
+def test_the_lg2_reading_damps_less(step_ln2, step_lg2):
+    # the paper prints "lg 2 / pi"; read as lg 2 the decrement is 0.301 instead of 0.693: 43 % of the
+    # damping and larger peaks (shown, not chosen: the file uses ln 2)
+    (_, ln2), (_, lg2) = step_ln2, step_lg2
+    for a, b in zip(ln2["links"], lg2["links"]):
+        assert b["damping"] == pytest.approx(a["damping"] * math.log10(2) / math.log(2), rel=1e-9)
+    peak = lambda chain, body: next(x["elastic_peak_accel"] for x in chain["bodies"] if x["body"] == body)  # noqa: E731
+    assert peak(lg2, "cam") > peak(ln2, "cam")
+
+
+def test_stiff_links_without_play_are_the_rigid_chain():
+    # no clearance, a smooth law (poly5), the links 100 x and 1000 x stiffer (c4 the same factor): every body
+    # follows its member of the rigid chain, closer the stiffer (tolerances tight enough for 1 nm deflections)
+    from strokeopt.contact.simulate import SimulationOptions
+
+    errors = []
+    for factor in (100, 1000):
+        stiff = [f"model.links.c2.stiffness_N_m={1e7 * factor:g}", f"model.links.c6.stiffness_N_m={1e7 * factor:g}",
+                 f"model.links.c4.stiffness_N_m_rad={1680 * factor:g}", *NO_PLAY, 'motion.law="poly5"']
+        result, chain = _chain(stiff, SimulationOptions(rtol=1e-8, atol=1e-9))
+        errors.append(max(abs(b["ratio"] - 1) for b in chain["bodies"]))
+        kin = load_problem(KNITTING, stiff).stroke().evaluate(result.t)
+        assert np.max(np.abs(result.positions["cam"] - kin.s)) < 1e-7  # 0.1 um of 0.4 mm
+    assert errors[1] < 1e-3 and errors[1] < errors[0] / 5
+
+
+def test_zero_and_tiny_clearance_are_continuous():
+    # no chatter blow-up: a 1 nm play gives the answer of none, in a bounded number of steps
+    none, c_none = _chain(NO_PLAY)
+    tiny, c_tiny = _chain(["model.links.c2.clearance_mm=1e-6", "model.links.c4.clearance_rad=1e-9"])
+    for a, b in zip(c_none["links"], c_tiny["links"]):
+        assert b["peak_abs"] == pytest.approx(a["peak_abs"], rel=0.01)
+    for a, b in zip(c_none["bodies"], c_tiny["bodies"]):
+        assert b["elastic_peak_accel"] == pytest.approx(a["elastic_peak_accel"], rel=0.02)
+    assert tiny.stats["nsteps"] < 10 * none.stats["nsteps"] + 20_000
+
+
+def test_simulate_step_cli(capsys, tmp_path):
+    png = tmp_path / "step.png"
+    assert main(["simulate", str(KNITTING), "--scene", "step", "--plot", str(png)]) == 0
+    out = capsys.readouterr().out
+    assert "elastic chain against the rigid chain" in out and "screw torque" in out
+    assert png.stat().st_size > 20_000
+    assert main(["simulate", str(KNITTING), "--scene", "step", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["status"] == "ok" and {k["link"] for k in report["chain"]["links"]} == {"c2", "c4", "c6"}
+
+
+def test_negative_clearance_is_one_line(capsys):
+    err = _error(capsys, ["simulate", str(KNITTING), "--scene", "step", "--set", "model.links.c2.clearance_mm=-0.01"])
+    assert "model.links.c2.clearance_mm" in err

@@ -207,7 +207,14 @@ def _report_scene(args, problem, scene, result, extra=None, kind: str = "simulat
         _emit(to_json(summary))
     else:
         print(scene_text(problem, scene, summary))
-    what = extra.get("objective") if extra else result.stroke_label  # verify: the design's objective
+    what = extra.get("objective", result.stroke_label) if extra else result.stroke_label  # verify: the design's
+    if extra and "chain" in extra:  # a model on a transmission's members: elastic against rigid
+        from ..report.contact import plot_chain
+
+        stroke = args.design_stroke or problem.stroke()
+        _write_figure(lambda p: plot_chain(result, problem, stroke, p),
+                      _plot_path(args, kind, scene, spm_tag(result.spm), what), args)
+        return 0
     _write_figure(lambda p: plot_scene(result, p), _plot_path(args, kind, scene, spm_tag(result.spm), what), args)
     return 0
 
@@ -267,7 +274,10 @@ def cmd_simulate(args) -> int:
                       _plot_path(args, "simulate_sweep", scene, spm_tag(args.spm), problem.stroke().label), args)
         return 0
     result = simulate_scene(problem, scene, problem.spm, stroke=args.design_stroke, options=options)
-    return _report_scene(args, problem, scene, result)
+    from ..contact.chain import chain_results
+
+    chain = chain_results(problem, result, args.design_stroke or problem.stroke())  # a model on a transmission
+    return _report_scene(args, problem, scene, result, {"chain": chain} if chain else None)
 
 
 def cmd_verify(args) -> int:

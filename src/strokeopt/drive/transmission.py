@@ -68,11 +68,34 @@ class Transmission:
         (phi,) = evaluate(self._inverse_function(), x)
         return phi
 
+    def chain(self) -> list[tuple[str, object, str]]:
+        """The members the transmission moves, motor side first, as ``(name, map, unit)``: ``map`` takes
+        the previous member's coordinate (the motor angle for the first) to this one's, with CasADi
+        operations; the last member is the load; ``unit`` is "m" or "rad". A constant-ratio drive has
+        one member, the load; a chain (screw, lever) lists each."""
+        return [("load", self.position, "m")]
+
     def stages(self, phi) -> list[tuple[str, object, str]]:
-        """The members the transmission moves, motor side first, as ``(name, position, unit)`` with
-        CasADi expressions of the motor angle ``phi``; the last is the load (``unit`` "m" or "rad").
-        A constant-ratio drive has one stage, the load; a chain (screw, lever) lists its members."""
-        return [("load", self.position(phi), "m")]
+        """Every member's coordinate as a CasADi expression of the motor angle ``phi``: ``(name, q, unit)``."""
+        out, q = [], phi
+        for name, step, unit in self.chain():
+            q = step(q)
+            out.append((name, q, unit))
+        return out
+
+    def stage_map(self, start: str, end: str, q):
+        """The coordinate of member ``end`` from that of member ``start`` (``"motor"``: the motor angle),
+        composing the chain's maps between them; ``end`` must come after ``start``."""
+        names = ["motor"] + [name for name, _, _ in self.chain()]
+        i, j = names.index(start), names.index(end)
+        if j <= i:
+            raise ValueError(f"{end!r} does not follow {start!r} in the {self.name} ({' -> '.join(names)})")
+        for _, step, _ in self.chain()[i:j]:
+            q = step(q)
+        return q
+
+    def stage_unit(self, name: str) -> str:
+        return "rad" if name == "motor" else next(u for n, _, u in self.chain() if n == name)
 
     def stage_names(self) -> list[str]:
         return [name for name, _, _ in self.stages(ca.SX.sym("phi"))]
@@ -254,11 +277,22 @@ class ScrewLever(Transmission):
 
     name = "screw_lever"
 
-    def __init__(self, lead: float, R0: float, R0P: float, offset: float = 0.0, inertia: float = 0.0):
+    def __init__(self, lead: float, R0: float, R0P: float, offset: float = 0.0, inertia: float = 0.0,
+                 screw_diameter: float | None = None, thread_friction: float = 0.15, thread_angle: float = math.radians(30)):
         if not (lead > 0 and R0 > 0 and R0P > 0):
             raise ValueError("lead and lever arms must be positive")
         self.lead, self.R0, self.R0P, self.offset, self.inertia = (float(lead), float(R0), float(R0P),
                                                                    float(offset), float(inertia))
+        self.screw_diameter, self.thread_friction, self.thread_angle = screw_diameter, thread_friction, thread_angle
+
+    def screw_torque(self, force):
+        """Torque [N m] that turns the screw against an axial nut force ``force`` [N] (raising the load,
+        the worse sense): ``F d2/2 tan(lambda + rho')`` with the lead angle ``lambda = atan(s / (pi d2))``
+        and the friction angle of the thread flanks ``rho' = atan(mu / cos(beta/2))`` (``screw_diameter``
+        d2 = pitch diameter, ``thread_friction`` mu, ``thread_angle`` beta: 30 deg trapezoidal)."""
+        lam = math.atan(self.lead / (math.pi * self.screw_diameter))
+        rho = math.atan(self.thread_friction / math.cos(self.thread_angle / 2))
+        return force * self.screw_diameter / 2 * math.tan(lam + rho)
 
     def nut_position(self, phi):
         """x2 [m] of the nut for the screw angle ``phi`` [rad]."""
@@ -275,10 +309,8 @@ class ScrewLever(Transmission):
     def position(self, phi):
         return self.sleeve_position(self.lever_angle(self.nut_position(phi)))
 
-    def stages(self, phi):
-        x2 = self.nut_position(phi)
-        phi4 = self.lever_angle(x2)
-        return [("nut", x2, "m"), ("lever", phi4, "rad"), ("sleeve", self.sleeve_position(phi4), "m")]
+    def chain(self):
+        return [("nut", self.nut_position, "m"), ("lever", self.lever_angle, "rad"), ("sleeve", self.sleeve_position, "m")]
 
     def inverse_position(self, x):
         phi4 = ca.atan(x / self.R0P + math.tan(self.offset)) - self.offset

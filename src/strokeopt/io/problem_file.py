@@ -71,10 +71,13 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
 
     transmission = _read_transmission(top.table("transmission"), timing)
 
-    model = parse_model(top.table("model", required=False))
+    model = parse_model(top.table("model", required=False), transmission)
     scenes = parse_scenes(top.table("scenes", required=False), model)
     drive_table = top.table("drive", required=False)
     drive = parse_drive(drive_table, (path or Path(file)).parent) if drive_table is not None else None
+    if model is not None and model.transmission is not None and timing.intervals[0].start_position != 0:
+        raise ProblemError(file, "timing.start_position_mm", "a model on the transmission's members starts at the "
+                                                             "transmission's zero: start_position_mm must be 0")
     if drive is not None:
         stages = transmission.stage_names()
         for k, member in enumerate(drive.load.members):
@@ -210,6 +213,11 @@ def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagra
     return TimingDiagram(tuple(intervals), revs, times)
 
 
+def _optional_mm(f: Fields, key: str, lo: float, hi: float) -> float | None:
+    value = f.number(key, None, min=lo, max=hi)
+    return None if value is None else value * 1e-3
+
+
 def _read_transmission(trans: Fields, timing: TimingDiagram) -> Transmission:
     """``[transmission]``: a toothed belt pulley (``pulley_teeth``), or a screw and lever (``lead_mm``,
     ``lever_arm_mm`` R0, ``sleeve_arm_mm`` R0P, ``lever_offset_deg``, ``screw_inertia_kg_cm2``)."""
@@ -226,7 +234,12 @@ def _read_transmission(trans: Fields, timing: TimingDiagram) -> Transmission:
                     trans.number("lever_arm_mm", min=1.0, max=1e3) * 1e-3,
                     trans.number("sleeve_arm_mm", min=1.0, max=1e3) * 1e-3,
                     math.radians(trans.number("lever_offset_deg", 0.0, min=-80.0, max=80.0)),
-                    trans.number("screw_inertia_kg_cm2", 0.0, min=0.0, max=1e4) * 1e-4)
+                    trans.number("screw_inertia_kg_cm2", 0.0, min=0.0, max=1e4) * 1e-4,
+                    # the screw torque from the nut force (contact/chain.py): pitch diameters 1-100 mm, flank
+                    # friction 0.01 (ball screw) to 1, flank angles 0 (square) to 90 deg (metric 60, Tr 30)
+                    _optional_mm(trans, "screw_diameter_mm", 1.0, 100.0),
+                    trans.number("thread_friction", 0.15, min=0.01, max=1.0),
+                    math.radians(trans.number("thread_angle_deg", 30.0, min=0.0, max=90.0)))
     positions = [p for i in timing.intervals for p in (i.start_position, i.end_position)]
     why = tr.range_error(min(positions), max(positions))
     if why is not None:
