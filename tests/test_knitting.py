@@ -279,3 +279,16 @@ def test_simulate_step_cli(capsys, tmp_path):
 def test_negative_clearance_is_one_line(capsys):
     err = _error(capsys, ["simulate", str(KNITTING), "--scene", "step", "--set", "model.links.c2.clearance_mm=-0.01"])
     assert "model.links.c2.clearance_mm" in err
+
+
+def test_bench_registers_the_elastic_step():
+    from strokeopt.bench.registry import REGISTRY
+
+    assert REGISTRY["simulate_step"].target_s == 0.2  # one elastic step simulation under 0.2 s (strokeopt bench)
+
+
+def test_commands_without_the_screw_lever_or_stepper_say_so(capsys):
+    err = _error(capsys, ["solve", str(KNITTING)])
+    assert "transmission.type" in err and "screw_lever" in err
+    err = _error(capsys, ["accuracy", str(KNITTING)])
+    assert "drive.motor" in err and "stepper" in err

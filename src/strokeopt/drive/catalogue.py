@@ -217,7 +217,10 @@ class Catalogue:
     files: list[str] = field(default_factory=list)
 
     def motor(self, name: str, where: tuple[str, str] = ("--motor", "")) -> ServoMotor:
-        """The motor called ``name``; an unknown name is a :class:`ProblemError` at ``where``."""
+        """The servo motor called ``name``; an unknown name (or a stepper's) is a :class:`ProblemError` at ``where``."""
+        if name in self.steppers:
+            raise ProblemError(where[0], where[1], f"{name!r} is a stepper motor; this takes a servo motor (the "
+                                                   f"catalogue's: {', '.join(self.motors)})")
         if name not in self.motors:
             raise ProblemError(where[0], where[1], f"unknown motor {name!r}{did_you_mean(name, self.motors)}; "
                                                    f"the catalogue has {', '.join(self.motors)}")
