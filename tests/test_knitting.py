@@ -282,6 +282,7 @@ def test_negative_clearance_is_one_line(capsys):
 
 
 def test_bench_registers_the_elastic_step():
+    from strokeopt.bench import contact  # noqa: F401  (registers the contact benchmarks)
     from strokeopt.bench.registry import REGISTRY
 
     assert REGISTRY["simulate_step"].target_s == 0.2  # one elastic step simulation under 0.2 s (strokeopt bench)
