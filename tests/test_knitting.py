@@ -293,3 +293,13 @@ def test_commands_without_the_screw_lever_or_stepper_say_so(capsys):
     assert "transmission.type" in err and "screw_lever" in err
     err = _error(capsys, ["accuracy", str(KNITTING)])
     assert "drive.motor" in err and "stepper" in err
+
+
+def test_max_spm_is_the_shortest_step_the_stepper_makes(knitting):
+    # the highest test-cycle rate under the pull-out curve: at it every check passes, one spm above the
+    # pull-out check fails; the step then takes 6 ms x 1000 / max_spm
+    (c,) = size_drive(knitting, find_max_spm=True).candidates
+    assert c.max_spm_binding == "pull_out_torque" and 100 < c.max_spm < 1000
+    assert size_drive(knitting.with_spm(c.max_spm)).candidates[0].feasible
+    above = size_drive(knitting.with_spm(c.max_spm + 1)).candidates[0]
+    assert not above.feasible and above.binding == "pull_out_torque"

@@ -60,6 +60,9 @@ def cmd_size(args) -> int:
     problem = _load(args)
     if problem.drive is None:
         raise ProblemError(args.problem, "drive", "the problem has no [drive] section (motor, moving_mass_kg, ...)")
+    if args.continuous_radius and not hasattr(problem.transmission, "radius"):
+        raise ProblemError("--continuous-radius", "", f"needs a belt pulley; the problem's transmission is a "
+                                                      f"{problem.transmission.name}")
     catalogue = problem.drive.catalogue(args.catalogue)
     progress = progress_bar(args, "max spm", "pair", when=args.max_spm)
     sizing = size_drive(problem, catalogue=catalogue, motors=args.motor, teeth=args.pulley_teeth,

@@ -58,7 +58,10 @@ class Candidate:
 
     def row(self, explain: bool = False, with_max_spm: bool = False) -> dict:
         if self.stepper:
-            return self._stepper_row(explain)
+            out = self._stepper_row(explain)
+            if with_max_spm:
+                out["max_spm"], out["max_spm_binding"] = self.max_spm, self.max_spm_binding
+            return out
         out = {
             "motor": self.motor.name,
             "pulley_teeth": self.pulley.teeth,

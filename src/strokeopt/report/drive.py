@@ -205,7 +205,13 @@ def stepper_text(sizing, report: dict, explain: bool = False) -> str:
             ("pull_out_limit_pct", "allowed %"), ("worst_step_rate_Hz", "at Hz"), ("step_rate_Hz", "step rate Hz"),
             ("max_step_rate_Hz", "max Hz"), ("inertia_ratio", "J ratio"), ("feasible", "feasible"),
             ("binding", "binding"), ("margin", "margin")]
+    if sizing.max_spm_resolution is not None:
+        cols += [("max_spm", "max spm"), ("max_spm_binding", "limited by")]
     lines.append(format_table(report["candidates"], cols))
+    if sizing.max_spm_resolution is not None and c0.max_spm is not None:
+        scale = sizing.spm / c0.max_spm  # every interval's time scales with the cycle
+        lines.append(f"\nmax spm: bisection to {sizing.max_spm_resolution:g} spm (rounded down); at {c0.max_spm:g} spm every "
+                     f"interval takes {scale:.3g} x its time at {sizing.spm:g} spm")
     if explain:
         for c in sizing.candidates:
             lines.append(f"\nmotor torque of {c.motor.name} at its peak ({c.peak_angle_deg:.1f} deg), by term [N m]:")
