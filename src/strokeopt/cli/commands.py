@@ -86,7 +86,7 @@ def cmd_size(args) -> int:
     best = sizing.candidates[0]  # the figure's pair
     _write_figure(lambda p: plot_sizing(sizing, None, p),
                   _plot_path(args, "size", spm_tag(problem.spm), sizing.inputs["law"], best.motor.name,
-                             f"z{best.pulley.teeth}"), args)
+                             f"z{best.pulley.teeth}" if best.pulley.teeth is not None else best.pulley.name), args)
     if not feasible:
         print(f"strokeopt: {report['verdict']}", file=sys.stderr)
         return 1

@@ -22,7 +22,16 @@ forward with ``F = law(c) + damping * c'`` while it acts; ``law(c)`` is
 while ``c >= 0`` (compression only). A *grip* (the balls of the needle-bar cage
 holding the needle) is bilateral, ``F = k (x_a - x_b) + b (x_a' - x_b')``, and
 acts while a condition between two other bodies holds:
-``x_p - x_q + acts_while_offset >= 0``.
+``x_p - x_q + acts_while_offset >= 0``. A *link* (``[model.links.*]``: the elastic
+chain of the knitting machine) is bilateral with a dead zone, a total play V:
+``F = k (c -+ V/2) + b c'`` once ``|c| > V/2``; its damping may come from a
+logarithmic decrement (``b = delta/pi sqrt(k m*)``).
+
+Bodies may move on the members of the problem's transmission (``stage``: the nut,
+the lever, the sleeve of a screw lever; an angular member takes ``inertia_kg_cm2``):
+the driven body then follows the stroke through the transmission, and a body that
+``rides_on`` another is carried by it through the transmission's maps (no state of
+its own; its inertia enters its host's equation, scene.py).
 """
 
 from __future__ import annotations
