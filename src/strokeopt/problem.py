@@ -10,7 +10,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .drive.transmission import BeltPulley
+from .drive.transmission import Transmission
 from .errors import ProblemError
 from .motion.laws import MotionLaw
 from .motion.timing import TimingDiagram
@@ -39,7 +39,7 @@ class Problem:
     spm: float
     timing: TimingDiagram
     default_law: MotionLaw
-    transmission: BeltPulley  # [transmission]: the toothed pulley, with its teeth (no inertia: the ideal drive)
+    transmission: Transmission  # [transmission]: the toothed pulley, with its teeth (no inertia: the ideal drive), or a screw and lever
     data: dict = field(repr=False)  # the raw data after overrides, for reporting
     model: Model | None = field(default=None, repr=False)  # [model]: the contact model (contact/model.py)
     scenes: dict[str, Scene] | None = field(default=None, repr=False)  # [scenes.*] (contact/scene.py)
@@ -54,9 +54,9 @@ class Problem:
     error_terms: tuple = field(default=(), repr=False)
 
     @property
-    def pulley_teeth(self) -> int:
-        """Tooth count of the problem's pulley (``transmission.pulley_teeth``)."""
-        return self.transmission.teeth
+    def pulley_teeth(self) -> int | None:
+        """Tooth count of the problem's pulley (``transmission.pulley_teeth``); None without a pulley."""
+        return getattr(self.transmission, "teeth", None)
 
     @property
     def period(self) -> float:

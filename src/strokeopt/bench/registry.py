@@ -108,11 +108,10 @@ def format_results(results: list[BenchResult]) -> str:
     return "\n".join(lines).rstrip()
 
 
-def reference_problem_path() -> Path:
-    """The reference problem file, from the working directory or the source tree."""
+def reference_problem_path(name: str = "deco2000_needle_bar.toml") -> Path:
+    """The reference problem file (or another of ``problems/``), from the working directory or the source tree."""
     for base in (Path.cwd(), Path(__file__).resolve().parents[3]):
-        path = base / "problems" / "deco2000_needle_bar.toml"
+        path = base / "problems" / name
         if path.is_file():
             return path
-    raise ProblemError("problems/deco2000_needle_bar.toml", "", "reference problem not found: run from the "
-                                                                 "repository root")
+    raise ProblemError(f"problems/{name}", "", "problem file not found: run from the repository root")

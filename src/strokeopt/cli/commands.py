@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ..errors import ProblemError
-from .common import _emit, _load, _plot_path, _write_figure, drive_used, progress_bar, spm_tag
+from .common import _emit, _load, _plot_path, _write_figure, drive_used, progress_bar, spm_tag, step_angle
 
 
 def cmd_laws(args) -> int:
@@ -36,7 +36,7 @@ def cmd_kinematics(args) -> int:
 
     problem = _load(args)
     stroke = args.design_stroke or problem.stroke()
-    summary = kinematics_summary(problem, stroke, problem.spm)
+    summary = kinematics_summary(problem, stroke, problem.spm, step_angle(problem))
     if args.design_stroke is not None:  # the table's law column: the design's stroke, not the file's law
         for row in summary["intervals"] + summary["moves"]:
             if row.get("law") is not None:
@@ -60,6 +60,9 @@ def cmd_size(args) -> int:
     problem = _load(args)
     if problem.drive is None:
         raise ProblemError(args.problem, "drive", "the problem has no [drive] section (motor, moving_mass_kg, ...)")
+    if args.continuous_radius and not hasattr(problem.transmission, "radius"):
+        raise ProblemError("--continuous-radius", "", f"needs a belt pulley; the problem's transmission is a "
+                                                      f"{problem.transmission.name}")
     catalogue = problem.drive.catalogue(args.catalogue)
     progress = progress_bar(args, "max spm", "pair", when=args.max_spm)
     sizing = size_drive(problem, catalogue=catalogue, motors=args.motor, teeth=args.pulley_teeth,
@@ -83,7 +86,7 @@ def cmd_size(args) -> int:
     best = sizing.candidates[0]  # the figure's pair
     _write_figure(lambda p: plot_sizing(sizing, None, p),
                   _plot_path(args, "size", spm_tag(problem.spm), sizing.inputs["law"], best.motor.name,
-                             f"z{best.pulley.teeth}"), args)
+                             f"z{best.pulley.teeth}" if best.pulley.teeth is not None else best.pulley.name), args)
     if not feasible:
         print(f"strokeopt: {report['verdict']}", file=sys.stderr)
         return 1
@@ -207,7 +210,14 @@ def _report_scene(args, problem, scene, result, extra=None, kind: str = "simulat
         _emit(to_json(summary))
     else:
         print(scene_text(problem, scene, summary))
-    what = extra.get("objective") if extra else result.stroke_label  # verify: the design's objective
+    what = extra.get("objective", result.stroke_label) if extra else result.stroke_label  # verify: the design's
+    if extra and "chain" in extra:  # a model on a transmission's members: elastic against rigid
+        from ..report.contact import plot_chain
+
+        stroke = args.design_stroke or problem.stroke()
+        _write_figure(lambda p: plot_chain(result, problem, stroke, p),
+                      _plot_path(args, kind, scene, spm_tag(result.spm), what), args)
+        return 0
     _write_figure(lambda p: plot_scene(result, p), _plot_path(args, kind, scene, spm_tag(result.spm), what), args)
     return 0
 
@@ -267,7 +277,10 @@ def cmd_simulate(args) -> int:
                       _plot_path(args, "simulate_sweep", scene, spm_tag(args.spm), problem.stroke().label), args)
         return 0
     result = simulate_scene(problem, scene, problem.spm, stroke=args.design_stroke, options=options)
-    return _report_scene(args, problem, scene, result)
+    from ..contact.chain import chain_results
+
+    chain = chain_results(problem, result, args.design_stroke or problem.stroke())  # a model on a transmission
+    return _report_scene(args, problem, scene, result, {"chain": chain} if chain else None)
 
 
 def cmd_verify(args) -> int:

@@ -115,9 +115,20 @@ def drive_used(args, problem, motor=None, pulley_teeth=None) -> dict:
     """The motor and pulley a command used and where they come from (every report says so);
     ``motor``/``pulley_teeth`` replace the problem's (a solve's choice)."""
     drive = getattr(problem, "drive", None)
-    return {"motor": motor or (drive.motor if drive is not None else None),
-            "pulley_teeth": pulley_teeth or problem.pulley_teeth,
-            "from": getattr(args, "drive_from", None) or "the problem file"}
+    out = {"motor": motor or (drive.motor if drive is not None else None),
+           "pulley_teeth": pulley_teeth or problem.pulley_teeth,
+           "from": getattr(args, "drive_from", None) or "the problem file"}
+    if not hasattr(problem.transmission, "radius"):  # no pulley: say which transmission
+        out["transmission"] = problem.transmission.name
+    return out
+
+
+def step_angle(problem) -> float | None:
+    """The step angle [rad] of the problem's motor when it is a stepper (``drive.motor``), else None."""
+    drive = getattr(problem, "drive", None)
+    if drive is None or drive.motor is None:
+        return None
+    return getattr(drive.catalogue().actuator(drive.motor, (str(problem.file), "drive.motor")), "step_angle", None)
 
 
 def _load(args, fix_in_design: bool = False):

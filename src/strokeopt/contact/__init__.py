@@ -8,4 +8,5 @@ Modules in data-flow order:
 * simulate.py  one cycle with the driven body following a stroke (CVODES/IDAS): ``SceneResult``
 * studies.py   speed sweeps and the integrators' work-precision study
 * verify.py    a design's stroke re-simulated in a scene (``verify``)
+* chain.py     a model on a transmission's members (an elastic chain) against the rigid chain
 """

@@ -22,7 +22,16 @@ forward with ``F = law(c) + damping * c'`` while it acts; ``law(c)`` is
 while ``c >= 0`` (compression only). A *grip* (the balls of the needle-bar cage
 holding the needle) is bilateral, ``F = k (x_a - x_b) + b (x_a' - x_b')``, and
 acts while a condition between two other bodies holds:
-``x_p - x_q + acts_while_offset >= 0``.
+``x_p - x_q + acts_while_offset >= 0``. A *link* (``[model.links.*]``: the elastic
+chain of the knitting machine) is bilateral with a dead zone, a total play V:
+``F = k (c -+ V/2) + b c'`` once ``|c| > V/2``; its damping may come from a
+logarithmic decrement (``b = delta/pi sqrt(k m*)``).
+
+Bodies may move on the members of the problem's transmission (``stage``: the nut,
+the lever, the sleeve of a screw lever; an angular member takes ``inertia_kg_cm2``):
+the driven body then follows the stroke through the transmission, and a body that
+``rides_on`` another is carried by it through the transmission's maps (no state of
+its own; its inertia enters its host's equation, scene.py).
 """
 
 from __future__ import annotations
@@ -37,17 +46,26 @@ if TYPE_CHECKING:  # type only: io/problem_file.py passes the Fields reader of [
     from ..io.fields import Fields
 
 FRAME = "frame"
-ELEMENT_KINDS = ("spring", "contact", "grip")
+ELEMENT_KINDS = ("spring", "contact", "grip", "link")
 
 
 @dataclass(frozen=True)
 class Body:
-    """A rigid body on the axis. ``mass`` in kg."""
+    """A rigid body on the axis. ``mass`` in kg (its moment of inertia in kg m^2 on an angular stage).
+
+    ``stage``: the member of the problem's transmission whose coordinate the body moves on (None: the
+    model's own axis); a driven body on a stage follows the stroke through the transmission.
+    ``rides_on``: a body this one is rigidly coupled to through the transmission (its coordinate is
+    the chain's map from the host's stage to its own: a lever tilted by a nut); it has no state, its
+    inertia is carried by the host's equation."""
 
     name: str
     mass: float
     driven: bool = False
     label: str = ""
+    stage: str | None = None
+    rides_on: str | None = None
+    angular: bool = False  # on an angular coordinate (a lever): mass is a moment of inertia, positions in rad
 
 
 @dataclass(frozen=True)
@@ -82,6 +100,8 @@ class Element:
     force_law: ForceLaw | None = None
     acts_while: tuple[str, str, float] | None = None
     label: str = ""
+    clearance: float = 0.0  # a link's total play (m or rad): it acts once |x_a - x_b| passes clearance / 2
+    log_decrement: float | None = None  # a link's damping came from this logarithmic decrement
 
     @property
     def gap(self) -> float:
@@ -121,9 +141,31 @@ class Model:
     def driven(self) -> str:
         return next(b.name for b in self.bodies.values() if b.driven)
 
+    links: dict[str, Element] = field(default_factory=dict)
+    transmission: object = None  # the problem's transmission, when a body moves on one of its stages
+
     @property
     def elements(self) -> dict[str, Element]:
-        return {**self.springs, **self.contacts}
+        return {**self.springs, **self.contacts, **self.links}
+
+    def riders(self, host: str) -> list[Body]:
+        return [b for b in self.bodies.values() if b.rides_on == host]
+
+    def rider_map(self, body: Body, q):
+        """The coordinate of the rider ``body`` from its host's coordinate ``q`` (CasADi-friendly)."""
+        host = self.bodies[body.rides_on]
+        return self.transmission.stage_map(host.stage, body.stage, q)
+
+    def reduced_inertia(self, name: str) -> float:
+        """A body's inertia with its riders' at rest (x = 0): m + sum I_r (dq_r/dx)^2 (kg or kg m^2)."""
+        import casadi as ca
+
+        q = ca.SX.sym("q")
+        total = self.bodies[name].mass
+        for r in self.riders(name):
+            d = ca.Function("d", [q], [ca.jacobian(self.rider_map(r, q), q)])
+            total += r.mass * float(d(0.0)) ** 2
+        return total
 
 
 # --------------------------------------------------------------------------- parsing
@@ -139,6 +181,35 @@ def _name_list(f: "Fields", key: str, known, what: str, length: int | None = Non
         if v not in known:
             raise f.error(key, f"unknown {what} {v!r}; known: {', '.join(sorted(known))}")
     return list(value)
+
+
+def _parse_link(f: "Fields", name: str, bodies: dict, model_inertia) -> Element:
+    """A bilateral elastic link with a dead zone (a clearance) between two bodies on the same kind of
+    coordinate: ``F = k (c -+ V/2) + b c'`` once ``|c| > V/2`` (c = x_a - x_b, V the total play), 0 inside.
+    Damping ``damping_*`` or ``log_decrement`` delta: ``b = delta/pi sqrt(k m*)`` with ``m*`` the
+    reduced inertia at rest of the second body (the first when the second is the frame)."""
+    pair = _name_list(f, "bodies", set(bodies) | {FRAME}, "body", length=2)
+    if pair[0] == pair[1]:
+        raise f.error("bodies", f"an element needs two different bodies, got {pair[0]!r} twice")
+    angular = {bodies[b].angular for b in pair if b != FRAME}
+    if len(angular) > 1:
+        raise f.error("bodies", "links one body on a linear and one on an angular coordinate: put both on the "
+                                "same kind (a rider carries a body across the transmission)")
+    unit = ("N_m_rad", "N_m_s_rad", "rad", 1.0) if angular == {True} else ("N_m", "N_s_m", "mm", 1e-3)
+    # as springs (up to 1e12 N/m); torsion up to 1e9 N m/rad (a 100 mm steel shaft is ~1e6)
+    stiffness = f.number(f"stiffness_{unit[0]}", min=0.0, max=1e12 if unit[2] == "mm" else 1e9)
+    # clearances: up to 10 mm (0.01 mm is the knitting machine's V2) or 0.2 rad (11 deg)
+    clearance = f.number(f"clearance_{unit[2]}", 0.0, min=0.0, max=10.0 if unit[2] == "mm" else 0.2) * unit[3]
+    decrement = f.number("log_decrement", None, min=0.0, max=10.0)  # ln 2 = 0.693: amplitude halves per period
+    if decrement is not None and f.has(f"damping_{unit[1]}"):
+        raise f.error("log_decrement", f"give either log_decrement or damping_{unit[1]}, not both")
+    damping = f.number(f"damping_{unit[1]}", 0.0, min=0.0, max=1e7)
+    label = f.string("label", "")
+    f.finish()
+    if decrement is not None:
+        other = pair[1] if pair[1] != FRAME else pair[0]
+        damping = decrement / math.pi * math.sqrt(stiffness * model_inertia(other))
+    return Element(name, "link", (pair[0], pair[1]), stiffness, damping, 0.0, None, None, label, clearance, decrement)
 
 
 def _parse_element(f: "Fields", name: str, kind_default: str, bodies: dict, laws: dict) -> Element:
@@ -182,8 +253,47 @@ def _parse_element(f: "Fields", name: str, kind_default: str, bodies: dict, laws
                    laws.get(law_name) if law_name else None, acts_while, label)
 
 
-def parse_model(f: "Fields | None") -> Model | None:
-    """Read ``[model]``: bodies, force laws, springs, contacts and event roles. None if absent."""
+def _parse_body(bf: "Fields", name: str, transmission) -> Body:
+    stage = bf.string("stage", None)
+    angular = False
+    if stage is not None:
+        stages = transmission.stage_names() if transmission is not None else []
+        if stage not in stages:
+            raise bf.error("stage", f"{stage!r} is no member of the problem's transmission"
+                                    + (f" ({transmission.name}: {', '.join(stages)})" if stages else ""))
+        angular = transmission.stage_unit(stage) == "rad"
+    if angular:
+        if bf.has("mass_g"):
+            raise bf.error("mass_g", f"the {stage} turns: give its moment of inertia inertia_kg_cm2, not mass_g")
+        # a lever of 1e-4 kg cm^2 (the knitting machine's is 0.028) to a loom sley (13 000 kg cm^2)
+        mass = bf.number("inertia_kg_cm2", min=1e-5, max=1e6) * 1e-4
+    else:
+        # 1 mg (a needle is 200 mg) to 10 t (a loom sley is 25 kg); a lighter body on a 1e9 N/m contact
+        # vibrates beyond any integrator step
+        mass = bf.number("mass_g", min=1e-3, max=1e7) * 1e-3
+    body = Body(name, mass, bf.boolean("driven", False), bf.string("label", ""), stage, bf.string("rides_on", None),
+                angular)
+    return body
+
+
+def _check_rider(tb: "Fields", body: Body, bodies: dict, transmission) -> None:
+    host = bodies.get(body.rides_on)
+    where = f"{body.name}.rides_on"
+    if host is None:
+        raise tb.error(where, f"unknown body {body.rides_on!r}; known: {', '.join(sorted(bodies))}")
+    if body.driven or host.driven or host.rides_on is not None:
+        raise tb.error(where, "a rider rides on a free body that rides on nothing (and is not driven itself)")
+    if body.stage is None or host.stage is None:
+        raise tb.error(where, "a rider and its host need a stage each (the transmission couples them)")
+    order = transmission.stage_names()
+    if order.index(body.stage) <= order.index(host.stage):
+        raise tb.error(where, f"the rider's stage {body.stage!r} must come after its host's {host.stage!r} "
+                              f"in the {transmission.name} ({' -> '.join(order)})")
+
+
+def parse_model(f: "Fields | None", transmission=None) -> Model | None:
+    """Read ``[model]``: bodies, force laws, springs, contacts, links and event roles. None if absent.
+    ``transmission``: the problem's, for bodies on its stages."""
     if f is None:
         return None
     description = f.string("description", "")
@@ -194,11 +304,11 @@ def parse_model(f: "Fields | None") -> Model | None:
         if name == FRAME:
             raise tb.error(name, f"{FRAME!r} is the fixed ground, not a body name")
         bf = tb.table(name)
-        # 1 mg (a needle is 200 mg) to 10 t (a loom sley is 25 kg); a lighter body on a 1e9 N/m contact
-        # vibrates beyond any integrator step
-        mass = bf.number("mass_g", min=1e-3, max=1e7) * 1e-3
-        bodies[name] = Body(name, mass, bf.boolean("driven", False), bf.string("label", ""))
+        bodies[name] = _parse_body(bf, name, transmission)
         bf.finish()
+    for body in bodies.values():
+        if body.rides_on is not None:
+            _check_rider(tb, body, bodies, transmission)
     tb.finish()
     driven = [b.name for b in bodies.values() if b.driven]
     if len(driven) != 1:
@@ -238,7 +348,18 @@ def parse_model(f: "Fields | None") -> Model | None:
             contacts[name] = _parse_element(tc.table(name), name, "contact", bodies, laws)
         tc.finish()
 
-    elements = {**springs, **contacts}
+    staged = any(b.stage is not None for b in bodies.values())
+    links: dict[str, Element] = {}
+    tk = f.table("links", required=False)
+    if tk is not None:
+        partial = Model(bodies, springs, contacts, laws, transmission=transmission if staged else None)
+        for name in list(tk.data):
+            if name in springs or name in contacts:
+                raise tk.error(name, "another element has the same name; element names must be unique")
+            links[name] = _parse_link(tk.table(name), name, bodies, partial.reduced_inertia)
+        tk.finish()
+
+    elements = {**springs, **contacts, **links}
     te = f.table("events", required=False)
     roles = EventRoles()
     if te is not None:
@@ -256,4 +377,4 @@ def parse_model(f: "Fields | None") -> Model | None:
                               for key, kinds in ROLE_KINDS.items()})
         te.finish()
     f.finish()
-    return Model(bodies, springs, contacts, laws, roles, description)
+    return Model(bodies, springs, contacts, laws, roles, description, links, transmission if staged else None)

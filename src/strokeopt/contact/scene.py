@@ -51,8 +51,13 @@ class Scene:
 
     @property
     def free_bodies(self) -> tuple[str, ...]:
-        """The bodies that have states, in state order."""
-        return tuple(b for b in self.bodies if b != self.driven)
+        """The bodies that have states, in state order (not the driven body, not the riders)."""
+        return tuple(b for b in self.bodies if b != self.driven and self.model.bodies[b].rides_on is None)
+
+    @property
+    def riders(self) -> tuple[str, ...]:
+        """The bodies carried by a free body through the transmission (no state of their own)."""
+        return tuple(b for b in self.bodies if self.model.bodies[b].rides_on is not None)
 
     @property
     def state_size(self) -> int:
@@ -82,6 +87,10 @@ def make_scene(model: Model, name: str, bodies, elements, description: str = "",
         raise ProblemError(file, f"{fld}.bodies", "names a body twice")
     if model.driven not in bodies:
         raise ProblemError(file, f"{fld}.bodies", f"must include the driven body {model.driven!r} (nothing moves without it)")
+    for b in bodies:
+        host = model.bodies[b].rides_on
+        if host is not None and host not in bodies:
+            raise ProblemError(file, f"{fld}.bodies", f"body {b!r} rides on {host!r}, which the scene does not name")
     known = model.elements
     for e in elements:
         if e not in known:
@@ -116,6 +125,31 @@ def parse_scenes(f: "Fields | None", model: Model | None) -> dict[str, Scene] | 
     if not scenes:
         raise f.error("", "defines no scene")
     return scenes
+
+
+def _through_transmission(tr, stage: str, s, v, a):
+    """Position, speed and acceleration of member ``stage`` of transmission ``tr`` while its load follows
+    ``s, v, a`` (CasADi): the motor angle from the inverse, the member by the chain rule (AD)."""
+    phi, omega, eps = tr.motor_kinematics(s, v, a)
+    q = ca.SX.sym("q")
+    g = tr.stage_map("motor", stage, q)
+    d1 = ca.jacobian(g, q)
+    g0, g1, g2 = ca.Function("driven_stage", [q], [g, d1, ca.jacobian(d1, q)])(phi)
+    return g0, g1 * omega, g1 * eps + g2 * omega**2
+
+
+def _link_force(el, c, cd, eps: float):
+    """Force of a link (compression ``c``, its rate ``cd``) with a dead zone of +-clearance/2, and its
+    switching function (>= 0 while it acts). Without clearance it always acts: no switch at all."""
+    h = el.clearance / 2
+    if h == 0:
+        return el.stiffness * c + el.damping * cd, ca.SX(1)
+    if eps > 0:
+        cz = eps * _softplus((c - h) / eps) - eps * _softplus((-c - h) / eps)
+        return el.stiffness * cz + (_sigmoid((c - h) / eps) + _sigmoid((-c - h) / eps)) * el.damping * cd, \
+            ca.fabs(c) - h
+    cz = ca.if_else(c > h, c - h, ca.if_else(c < -h, c + h, 0))
+    return ca.if_else(ca.fabs(c) > h, el.stiffness * cz + el.damping * cd, 0), ca.fabs(c) - h
 
 
 def _softplus(z):
@@ -157,20 +191,39 @@ class SceneODE:
             s = ca.conditional(k, s_list, s_list[-1])
             v = ca.conditional(k, v_list, v_list[-1])
             a = ca.conditional(k, a_list, a_list[-1])
-        xd, vd, ad = sign * (s - s_ref), sign * v, sign * a
+        model = scene.model
+        stage = model.bodies[scene.driven].stage
+        if stage is None:
+            xd, vd, ad = sign * (s - s_ref), sign * v, sign * a
+        else:  # the driven body follows the stroke through the transmission: its stage's coordinate
+            xd, vd, ad = _through_transmission(model.transmission, stage, s, v, a)
 
         pos = {scene.driven: xd, FRAME: ca.SX(0)}
         vel = {scene.driven: vd, FRAME: ca.SX(0)}
         for i, b in enumerate(free):
             pos[b] = z[i] * 1e-3
             vel[b] = z[n + i]
+        carried = {}  # rider -> (host, dq/dx, d2q/dx2)
+        for r in scene.riders:
+            body = model.bodies[r]
+            q = ca.SX.sym("q")
+            g = model.rider_map(body, q)
+            d1 = ca.jacobian(g, q)
+            gf = ca.Function("rider", [q], [g, d1, ca.jacobian(d1, q)])
+            host = body.rides_on
+            g0, g1, g2 = gf(pos[host])
+            pos[r], vel[r] = g0, g1 * vel[host]
+            carried[r] = (host, g1, g2)
         force_on = {b: ca.SX(0) for b in scene.bodies}
         force_on[FRAME] = ca.SX(0)
         forces, switches = [], []
         eps = smoothing
         for el in scene.element_objects:
             a_, b_ = el.bodies
-            if el.kind == "grip":
+            if el.kind == "link":
+                f, sw = _link_force(el, pos[a_] - pos[b_], vel[a_] - vel[b_], eps)
+                switches.append(sw)
+            elif el.kind == "grip":
                 c = pos[a_] - pos[b_]
                 cond = pos[el.acts_while[0]] - pos[el.acts_while[1]] + el.acts_while[2]
                 switches.append(cond)
@@ -191,8 +244,18 @@ class SceneODE:
             force_on[a_] -= f
             force_on[b_] += f
         masses = scene.model.bodies
-        acc = ca.vertcat(*[force_on[b] / masses[b].mass for b in free]) if n else ca.SX(0, 1)
+        # a host's equation carries its riders (Lagrange): (m + sum I g'^2) x'' = F + sum g' F_r - sum I g' g'' x'^2
+        generalised = {b: force_on[b] for b in free}
+        inertia = {b: masses[b].mass for b in free}
+        for r, (host, g1, g2) in carried.items():
+            generalised[host] += g1 * force_on[r] - masses[r].mass * g1 * g2 * vel[host] ** 2
+            inertia[host] += masses[r].mass * g1**2
+        acc = ca.vertcat(*[generalised[b] / inertia[b] for b in free]) if n else ca.SX(0, 1)
         drive = masses[scene.driven].mass * ad - force_on[scene.driven]
+        rider_out = []
+        for r, (host, g1, g2) in carried.items():
+            i = free.index(host)
+            rider_out += [pos[r], vel[r], g1 * acc[i] + g2 * vel[host] ** 2]
         ode = ca.vertcat(dur * 1e3 * z[n:], dur * acc)
         self.dae = {"x": z, "p": p, "t": sigma, "ode": ode}
         # the same ODE over a sub-interval [sigma_a, sigma_b] of a piece, in its own time theta in [0, 1]
@@ -202,8 +265,9 @@ class SceneODE:
         self.refine_dae = {"x": z, "p": pr, "t": theta, "ode": ode_sub}
         self.outputs = ca.Function(
             "scene_outputs", [sigma, z, p],
-            [t0 + tau, xd, vd, ad, acc, ca.vertcat(*forces) if forces else ca.SX(0, 1), drive],
-            ["sigma", "z", "p"], ["t", "x_d", "v_d", "a_d", "acc", "forces", "drive"])
+            [t0 + tau, xd, vd, ad, acc, ca.vertcat(*forces) if forces else ca.SX(0, 1), drive,
+             ca.vertcat(*rider_out) if rider_out else ca.SX(0, 1)],
+            ["sigma", "z", "p"], ["t", "x_d", "v_d", "a_d", "acc", "forces", "drive", "riders"])
         self.rhs = ca.Function("scene_rhs", [sigma, z, p], [ode], ["sigma", "z", "p"], ["ode"])
         # the switching functions (an element acts while its value is >= 0), one per element
         self.switches = ca.Function("scene_switches", [sigma, z, p],

@@ -179,6 +179,8 @@ class SceneResult:
 def _drive_reference(problem) -> tuple[float, float]:
     """``(sign, s_ref)`` of ``x_driven = sign * (s - s_ref)``: zero at the start of the handover move,
     positive in its direction (the first move if none is marked)."""
+    if problem.model is not None and problem.model.transmission is not None:
+        return 1.0, 0.0  # a model on the transmission's members: their own coordinates, from its zero
     moves = problem.timing.moves
     move = problem.timing.handover_move or moves[0]
     return (1.0 if move.stroke > 0 else -1.0), move.start_position
@@ -346,7 +348,7 @@ def _between_switches(ode, segment, z, pk):
 def _series(ode, sc, Z, S, P):
     """Time, per-body positions/velocities/accelerations, element forces and drive force (SI) at the states Z."""
     out = ode.outputs.map(Z.shape[1])(S[None, :], Z, P)
-    t, xd, vd, ad, acc, forces, drive = (np.asarray(o) for o in out)
+    t, xd, vd, ad, acc, forces, drive, riders = (np.asarray(o) for o in out)
     free = sc.free_bodies
     n = len(free)
     positions = {sc.driven: xd.ravel()}
@@ -356,6 +358,8 @@ def _series(ode, sc, Z, S, P):
         positions[b] = Z[i] * 1e-3
         velocities[b] = Z[n + i]
         accelerations[b] = acc[i]
+    for i, b in enumerate(sc.riders):  # carried through the transmission by their hosts
+        positions[b], velocities[b], accelerations[b] = riders[3 * i], riders[3 * i + 1], riders[3 * i + 2]
     return t.ravel(), positions, velocities, accelerations, {e: forces[i] for i, e in enumerate(sc.elements)}, drive.ravel()
 
 

@@ -73,6 +73,11 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     spm = float(spm if spm is not None else problem.spm)
     if not (math.isfinite(spm) and spm > 0):
         raise ProblemError("--spm", "", f"must be positive, got {spm!r}")
+    if not hasattr(problem.transmission, "radius"):
+        raise ProblemError(str(problem.file), "transmission.type",
+                           f"strokeopt solve designs moves through a belt pulley; a {problem.transmission.name} "
+                           "(its position function, a stepper's pull-out curve) is not yet in the design: "
+                           "kinematics, size and simulate take it")
     terms = tuple(getattr(problem, "error_terms", ()) if error_terms is None else error_terms)
     mesh = mesh or settings.mesh
     warm = warm_start.solutions if isinstance(warm_start, Design) else warm_start

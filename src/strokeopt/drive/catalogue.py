@@ -9,6 +9,8 @@ parts with files of the same form (``load_catalogue(extra_files=[...])`` or
 
     [[motor]]            name, model, maker, source, rated_speed_rpm, rated_torque_N_m,
                          stall_torque_N_m, peak_torque_N_m, rotor_inertia_kg_cm2
+    [[stepper]]          name, model, maker, source, note, step_angle_deg, holding_torque_N_m,
+                         rotor_inertia_kg_cm2, pull_out_step_rate_Hz = [...], pull_out_torque_N_m = [...]
     [[pulley]]           name, profile, teeth, inertia_kg_cm2 (optional, else the model)
     [inertia_model.<profile>]   kind = "power_law", source
     [[belt]]             name, profile, width_mm, width_factor,
@@ -37,7 +39,7 @@ from .transmission import PROFILE_PITCH, TEETH_RANGE, BeltPulley, pitch_diameter
 
 RPM = 2 * math.pi / 60  # rad/s per rpm
 KG_CM2 = 1e-4  # kg m^2 per kg cm^2
-BUILTIN_FILES = ("motors.toml", "gt3_pulleys.toml", "gt3_belts.toml")
+BUILTIN_FILES = ("motors.toml", "gt3_pulleys.toml", "gt3_belts.toml", "steppers.toml")
 BELT_CORDS = ("glass", "steel")
 
 
@@ -77,6 +79,39 @@ class ServoMotor:
         """Peak torque [N m] available at ``speed`` [rad/s]; zero beyond the rated speed."""
         w = np.abs(np.asarray(speed, dtype=float))
         return np.where(w <= self.rated_speed, self.peak_torque, 0.0)
+
+
+@dataclass(frozen=True)
+class StepperMotor:
+    """A stepper motor, SI units: its step angle [rad], holding torque [N m], rotor inertia [kg m^2]
+    and the pull-out torque-speed curve as a table (speeds [rad/s] increasing, torques [N m]).
+
+    Between the table's points the pull-out torque is interpolated linearly; below the first point it
+    is the first point's; beyond the last there is none (the motor loses steps): the last speed is the
+    highest step rate it can run (:attr:`max_step_rate`).
+    """
+
+    name: str
+    step_angle: float
+    holding_torque: float
+    rotor_inertia: float
+    pull_out_speed: tuple[float, ...]
+    pull_out_torque: tuple[float, ...]
+    model: str = ""
+    maker: str = ""
+    source: str = ""
+    note: str = ""
+    kind = "stepper"
+
+    @property
+    def max_step_rate(self) -> float:
+        """The highest step rate of the pull-out table [Hz]."""
+        return self.pull_out_speed[-1] / self.step_angle
+
+    def pull_out(self, speed):
+        """Pull-out torque [N m] at ``speed`` [rad/s] (either sense); zero beyond the table."""
+        w = np.abs(np.asarray(speed, dtype=float))
+        return np.where(w <= self.pull_out_speed[-1], np.interp(w, self.pull_out_speed, self.pull_out_torque), 0.0)
 
 
 @dataclass(frozen=True)
@@ -174,6 +209,7 @@ class Catalogue:
     """Every part loaded from the catalogue files, by name."""
 
     motors: dict[str, ServoMotor] = field(default_factory=dict)
+    steppers: dict[str, StepperMotor] = field(default_factory=dict)
     pulleys: dict[str, Pulley] = field(default_factory=dict)
     belts: dict[str, Belt] = field(default_factory=dict)
     inertia_models: dict[str, PulleyInertiaModel] = field(default_factory=dict)
@@ -181,10 +217,23 @@ class Catalogue:
     files: list[str] = field(default_factory=list)
 
     def motor(self, name: str, where: tuple[str, str] = ("--motor", "")) -> ServoMotor:
-        """The motor called ``name``; an unknown name is a :class:`ProblemError` at ``where``."""
+        """The servo motor called ``name``; an unknown name (or a stepper's) is a :class:`ProblemError` at ``where``."""
+        if name in self.steppers:
+            raise ProblemError(where[0], where[1], f"{name!r} is a stepper motor; this takes a servo motor (the "
+                                                   f"catalogue's: {', '.join(self.motors)})")
         if name not in self.motors:
             raise ProblemError(where[0], where[1], f"unknown motor {name!r}{did_you_mean(name, self.motors)}; "
                                                    f"the catalogue has {', '.join(self.motors)}")
+        return self.motors[name]
+
+    def actuator(self, name: str, where: tuple[str, str] = ("--motor", "")):
+        """The servo motor or the stepper called ``name``; an unknown name is a :class:`ProblemError` at ``where``."""
+        if name in self.steppers:
+            return self.steppers[name]
+        if name not in self.motors:
+            known = {**self.motors, **self.steppers}
+            raise ProblemError(where[0], where[1], f"unknown motor {name!r}{did_you_mean(name, known)}; "
+                                                   f"the catalogue has {', '.join(known)}")
         return self.motors[name]
 
     def belt(self, name: str, where: tuple[str, str] = ("--belt", "")) -> Belt:
@@ -261,6 +310,26 @@ def load_catalogue(extra_files=(), builtin: bool = True) -> Catalogue:
                 raise row.error("peak_torque_N_m", f"{motor.peak_torque:g} is below the rated torque {motor.rated_torque:g}")
             row.finish()
             cat.motors[name] = motor
+
+        for row in top.tables("stepper", required=False):
+            name = unique("motor", row)  # one name space: --motor and drive.motor take either kind
+            step = math.radians(row.number("step_angle_deg", min=0.01, max=90.0))  # microsteps to 4-step motors
+            speeds = _number_list(row, "pull_out_step_rate_Hz")
+            torques = _number_list(row, "pull_out_torque_N_m")
+            if len(speeds) != len(torques):
+                raise row.error("pull_out_torque_N_m", f"has {len(torques)} values for {len(speeds)} step rates")
+            if any(b <= a for a, b in zip(speeds, speeds[1:])):
+                raise row.error("pull_out_step_rate_Hz", "must be a table of increasing step rates")
+            if speeds[-1] > 1e6:  # a million full steps a second is past any stepper and driver
+                raise row.error("pull_out_step_rate_Hz", f"{speeds[-1]:g} Hz is above the plausible 1e6 Hz")
+            holding = row.number("holding_torque_N_m", positive=True, max=1e3)  # steppers end near 50 N m
+            if max(torques) > holding:
+                raise row.error("pull_out_torque_N_m", f"{max(torques):g} N m is above the holding torque {holding:g}")
+            cat.steppers[name] = StepperMotor(
+                name, step, holding, row.number("rotor_inertia_kg_cm2", positive=True, max=1e4) * KG_CM2,
+                tuple(f * step for f in speeds), tuple(torques), row.string("model", name), row.string("maker", ""),
+                row.string("source", ""), row.string("note", ""))
+            row.finish()
 
         for profile, m in _profile_tables(top, "inertia_model", "pulley"):
             m.string("kind", "power_law", choices=("power_law",))

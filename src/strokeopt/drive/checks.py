@@ -61,11 +61,13 @@ class DriveLimits:
     ``peak_limit_pct``: the servo drive's peak current as % of the motor's
     rated torque (Digitax ST: 300 %, thesis 4.6). ``max_inertia_ratio``:
     largest load-to-rotor inertia ratio accepted (a common servo guideline,
-    not from the thesis).
+    not from the thesis). ``pull_out_safety_factor``: a stepper's torque demand must stay under its
+    pull-out torque divided by this at every speed (a stepper that exceeds its curve loses steps).
     """
 
     peak_limit_pct: float = 300.0
     max_inertia_ratio: float = 10.0
+    pull_out_safety_factor: float = 1.5  # a stepper's demand stays under pull-out / this at every speed
 
 
 @dataclass(frozen=True)
@@ -178,3 +180,23 @@ def binding_check(checks: list[Check]) -> Check:
     """The check with the smallest margin: the one that binds first (on a tie the first listed:
     ``peak_torque`` before ``overload``, which share the drive's limit when it is below the motor's peak)."""
     return min(checks, key=lambda c: round(c.margin, 12))
+
+
+def stepper_checks(total, omega, motor, reflected: float, limits: DriveLimits) -> list[Check]:
+    """The checks of a stepper (:class:`~strokeopt.drive.catalogue.StepperMotor`) over a cycle: the
+    torque demand ``total`` [N m] at the speeds ``omega`` [rad/s] as % of the pull-out torque at each
+    speed, against 100 % / ``pull_out_safety_factor``; the peak step rate against the table's last;
+    the load/rotor inertia ratio. ``total`` may carry leading axes (motors); the last is the samples."""
+    ratio = pull_out_ratio(total, omega, motor)
+    return [
+        Check("pull_out_torque", float(np.max(ratio)) * 100, 100 / limits.pull_out_safety_factor, "%"),
+        Check("step_rate", float(np.max(np.abs(omega))) / motor.step_angle, motor.max_step_rate, "Hz"),
+        Check("inertia_ratio", reflected / motor.rotor_inertia, limits.max_inertia_ratio, "-"),
+    ]
+
+
+def pull_out_ratio(total, omega, motor):
+    """|torque| / pull-out torque at each sample's speed (inf where the speed is beyond the curve)."""
+    pull_out = motor.pull_out(omega)
+    with np.errstate(divide="ignore"):
+        return np.where(pull_out > 0, np.abs(total) / np.where(pull_out > 0, pull_out, 1.0), np.inf)

@@ -25,7 +25,10 @@ inertia in kg m^2); ``transmission`` any :class:`~strokeopt.drive.transmission.T
 The model (rigid, one degree of freedom): with the load at ``x = f(phi)``,
 ``mu = dx/dphi``, ``nu = d2x/dphi2`` (AD, transmission.py) the force the
 transmission applies to the load is ``F = m (a - g) - sum(F_load)`` and the
-motor torque ``T = (J_rotor + J_transmission) eps + mu F``.
+motor torque ``T = (J_rotor + J_transmission) eps + mu F``. A member between motor and load (a nut,
+a lever: :class:`Member`) of inertia ``I`` on a stage ``q(phi)`` adds ``I q' (q' eps + q'' omega^2)``,
+which is ``J(phi) eps + 1/2 J'(phi) omega^2`` with ``J = I q'^2``; the load's own term is the same with
+``I = m``, ``q = x``.
 """
 
 from __future__ import annotations
@@ -75,13 +78,25 @@ class LoadForce:
 
 
 @dataclass(frozen=True)
+class Member:
+    """A body the transmission moves on the way to the load (a nut, a lever): its ``inertia`` in the
+    coordinate of the transmission's ``stage`` (kg on a linear stage, kg m^2 on an angular one)."""
+
+    name: str
+    stage: str
+    inertia: float
+
+
+@dataclass(frozen=True)
 class Load:
     """What the drive moves: a translating ``moving_mass`` [kg] (bar, carrier, belt),
-    ``gravity`` [m/s^2] along the load axis (-9.81 for an axis pointing up), load forces."""
+    ``gravity`` [m/s^2] along the load axis (-9.81 for an axis pointing up), load forces, and the
+    members between the motor and the load (:class:`Member`)."""
 
     moving_mass: float
     gravity: float = 0.0
     forces: tuple[LoadForce, ...] = ()
+    members: tuple[Member, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -103,11 +118,13 @@ class TorqueTerms:
     forces: dict
     load_force: object
     total: object
+    members: dict = None  # member name -> its torque (Load.members), empty for a load without members
 
     def as_dict(self) -> dict:
         """The torque terms by name, in the order they add up to ``total``."""
         out = {"rotor_inertia": self.rotor_inertia, "transmission_inertia": self.transmission_inertia,
                "moving_mass": self.moving_mass, "gravity": self.gravity}
+        out.update({f"member: {k}": v for k, v in (self.members or {}).items()})
         out.update({f"force: {k}": v for k, v in self.forces.items()})
         return out
 
@@ -140,12 +157,23 @@ def load_torque(motor, transmission, load: Load, s, v, a) -> TorqueTerms:
     force_torques = {k: -f * mu for k, f in forces.items()}
     load_force = m * (a - load.gravity) - f_ext
     total = rotor + trans + load_force * mu
-    return TorqueTerms(phi, omega, eps, rotor, trans, inertial, gravity, force_torques, load_force, total)
+    members = {}
+    if load.members:  # J_i(phi) eps + 1/2 J_i'(phi) omega^2 with J_i = I_i q_i'^2: I_i q_i' (q_i' eps + q_i'' omega^2)
+        stage = transmission.stage_transfer(phi)
+        for member in load.members:
+            d1, d2 = stage[member.stage]
+            members[member.name] = member.inertia * d1 * (d1 * eps + d2 * omega**2)
+            total = total + members[member.name]
+    return TorqueTerms(phi, omega, eps, rotor, trans, inertial, gravity, force_torques, load_force, total, members)
 
 
 def reflected_inertia(transmission, load: Load, phi=None) -> float:
     """Load inertia seen by the motor shaft [kg m^2]: transmission inertia + m * max(mu^2) over ``phi``."""
     phi = np.zeros(1) if phi is None else np.asarray(phi, dtype=float)
     _, mu, _ = transmission.transfer(phi)
-    return float(transmission.inertia + load.moving_mass * np.max(np.asarray(mu) ** 2))
+    j = load.moving_mass * np.asarray(mu) ** 2
+    if load.members:
+        stage = transmission.stage_transfer(phi)
+        j = j + sum(m.inertia * np.asarray(stage[m.stage][0]) ** 2 for m in load.members)
+    return float(transmission.inertia + np.max(j))
 

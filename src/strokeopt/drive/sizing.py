@@ -20,7 +20,8 @@ import numpy as np
 
 from ..errors import ProblemError, SolverError
 from ..motion.stroke import Kinematics
-from .checks import BeltSpec, Check, DriveLimits, binding_check, build_checks, cycle_values
+from .checks import (BeltSpec, Check, DriveLimits, binding_check, build_checks, cycle_values, pull_out_ratio,
+                     stepper_checks)
 from .load import Load, TorqueTerms, load_torque, reflected_inertia, rotor_inertia_of
 from .transmission import PROFILE_PITCH, BeltPulley
 
@@ -37,6 +38,7 @@ class Candidate:
     peak_angle_deg: float
     max_spm: float | None = None
     max_spm_binding: str | None = None
+    worst: dict | None = None  # a stepper's point of least pull-out reserve: speed, step rate, demand, pull-out
 
     def check(self, name: str) -> Check:
         return next(c for c in self.checks if c.name == name)
@@ -50,7 +52,16 @@ class Candidate:
         """The check with the smallest margin (violated first, or closest to its limit)."""
         return binding_check(self.checks).name
 
+    @property
+    def stepper(self) -> bool:
+        return getattr(self.motor, "kind", "servo") == "stepper"
+
     def row(self, explain: bool = False, with_max_spm: bool = False) -> dict:
+        if self.stepper:
+            out = self._stepper_row(explain)
+            if with_max_spm:
+                out["max_spm"], out["max_spm_binding"] = self.max_spm, self.max_spm_binding
+            return out
         out = {
             "motor": self.motor.name,
             "pulley_teeth": self.pulley.teeth,
@@ -73,6 +84,37 @@ class Candidate:
             out["peak_angle_deg"] = self.peak_angle_deg
             out["torque_at_peak_N_m"] = dict(self.peak_terms)
         return out
+
+
+    def _stepper_row(self, explain: bool) -> dict:
+        out = {"motor": self.motor.name, "transmission": self.pulley.name,
+               "peak_torque_N_m": abs(self.peak_terms["total"]),
+               "pull_out_pct": self.check("pull_out_torque").value, "pull_out_limit_pct": self.check("pull_out_torque").limit,
+               "step_rate_Hz": self.check("step_rate").value, "max_step_rate_Hz": self.check("step_rate").limit,
+               "inertia_ratio": self.check("inertia_ratio").value, "feasible": self.feasible, "binding": self.binding,
+               "margin": binding_check(self.checks).margin, **(self.worst or {})}
+        if explain:
+            out["checks"] = [c.as_dict() for c in self.checks]
+            out["peak_angle_deg"] = self.peak_angle_deg
+            out["torque_at_peak_N_m"] = dict(self.peak_terms)
+        return out
+
+
+@dataclass(frozen=True)
+class FixedTransmission:
+    """The problem's own transmission as the one "pulley" a sizing tries (a screw and lever: nothing
+    to choose from a catalogue)."""
+
+    tr: object
+    teeth = None
+    pitch_diameter = None
+
+    @property
+    def name(self) -> str:
+        return self.tr.name
+
+    def transmission(self):
+        return self.tr
 
 
 @dataclass
@@ -128,15 +170,28 @@ def candidates(kin, motors, pulleys, load: Load, limits: DriveLimits, belt: Belt
             terms = {name: float(np.broadcast_to(val, kin.s.shape)[i]) for name, val in base.as_dict().items()}
             terms["rotor_inertia"] = float(rotor[k, 0] * base.eps[i])
             terms["total"] = float(total[k, i])
-            checks = build_checks(peak[k], rms[k], peak_speed, peak_force, m, reflected, limits, belt, p.teeth)
-            out.append(Candidate(m, p, spm, checks, terms, float(360.0 * kin.t[i] / period)))
+            if getattr(m, "kind", "servo") == "stepper":
+                checks = stepper_checks(total[k], base.omega, m, reflected, limits)
+            else:
+                checks = build_checks(peak[k], rms[k], peak_speed, peak_force, m, reflected, limits, belt, p.teeth)
+            cand = Candidate(m, p, spm, checks, terms, float(360.0 * kin.t[i] / period))
+            if cand.stepper:
+                ratio = pull_out_ratio(total[k], base.omega, m)
+                w = int(np.argmax(ratio))
+                cand.worst = {"worst_speed_rpm": abs(float(base.omega[w])) * 60 / (2 * math.pi),
+                               "worst_step_rate_Hz": abs(float(base.omega[w])) / m.step_angle,
+                               "worst_torque_N_m": abs(float(total[k, w])),
+                               "worst_pull_out_N_m": float(m.pull_out(base.omega[w]))}
+            out.append(cand)
     return out
 
 
 def rank(candidates: list[Candidate]) -> list[Candidate]:
     """Feasible pairs first; then by the thesis's criterion, the theoretical overload
     (peak load torque / rated torque, thesis 4.6), lowest first; ties by inertia ratio."""
-    return sorted(candidates, key=lambda c: (not c.feasible, c.check("overload").value, c.check("inertia_ratio").value))
+    # a stepper's load ratio is its demand against the pull-out curve
+    return sorted(candidates, key=lambda c: (not c.feasible, c.check("pull_out_torque" if c.stepper else "overload").value,
+                                             c.check("inertia_ratio").value))
 
 
 def bisect_highest(ok, lo: float, hi: float, resolution: float) -> tuple[float, float]:
@@ -200,10 +255,18 @@ def size_drive(problem, spm: float | None = None, *, catalogue=None, motors=None
         raise ProblemError(str(problem.file), "drive", "the problem has no [drive] section (motor, moving mass, ...)")
     spm = problem.spm if spm is None else spm
     cat = catalogue if catalogue is not None else spec.catalogue()
-    if spec.motor is not None:
-        cat.motor(spec.motor, (spec.file, "drive.motor"))  # the problem's own motor must exist
-    chosen = [cat.motor(n) for n in motors] if motors else list(cat.motors.values())
-    if teeth:
+    own = cat.actuator(spec.motor, (spec.file, "drive.motor")) if spec.motor is not None else None  # must exist
+    stepper = getattr(own, "kind", "servo") == "stepper"
+    chosen = [cat.actuator(n) for n in motors] if motors else \
+        list(cat.steppers.values()) if stepper else list(cat.motors.values())
+    if len({getattr(m, "kind", "servo") for m in chosen}) > 1:
+        raise ProblemError("--motor", "", "size servo motors and steppers in separate runs (their checks differ)")
+    if not hasattr(problem.transmission, "radius"):  # nothing to choose: the problem's screw and lever
+        if teeth:
+            raise ProblemError("--pulley-teeth", "", f"the problem's transmission is a {problem.transmission.name}, "
+                                                     "not a belt pulley")
+        pulleys = [FixedTransmission(problem.transmission)]
+    elif teeth:
         pulleys = []
         for z in teeth:
             found = [p for p in cat.pulleys_of(spec.profile) if p.teeth == z]

@@ -14,7 +14,7 @@ from pathlib import Path
 from ..errors import ProblemError
 from .catalogue import BELT_CORDS, load_catalogue
 from .checks import BeltSpec, DriveLimits
-from .load import G, Load, LoadForce
+from .load import G, Load, LoadForce, Member
 from .transmission import PROFILE_PITCH, TEETH_RANGE
 
 
@@ -61,8 +61,10 @@ def parse_drive(f, base_dir: Path | None = None) -> DriveSpec:
     # positions in problem files are measured upward
     gravity = {"down": -G, "up": G, "off": 0.0}[gravity_dir]
     # servo drives give 100-500 % of rated torque for a peak; inertia ratios from 1:10 to 1000:1 are sized
+    # a stepper's torque reserve under its pull-out curve: 1 (none) to 5; 1.5-2 is the usual guideline
     limits = DriveLimits(f.number("peak_limit_pct", 300.0, min=50.0, max=1000.0),
-                         f.number("max_inertia_ratio", 10.0, min=0.1, max=1000.0))
+                         f.number("max_inertia_ratio", 10.0, min=0.1, max=1000.0),
+                         f.number("pull_out_safety_factor", 1.5, min=1.0, max=5.0))
     profile = f.string("pulley_profile", "GT3", choices=tuple(PROFILE_PITCH))
     tmin = f.number("pulley_teeth_min", 14, integer=True, min=TEETH_RANGE[0], max=TEETH_RANGE[1])  # see transmission.py
     tmax = f.number("pulley_teeth_max", 52, integer=True, min=TEETH_RANGE[0], max=TEETH_RANGE[1])
@@ -98,7 +100,20 @@ def parse_drive(f, base_dir: Path | None = None) -> DriveSpec:
         row.finish()
     if len({x.name for x in forces}) != len(forces):
         raise f.error("load_forces", "two load forces have the same name")
+    members = []
+    for row in f.tables("members", required=False):
+        name, stage = row.string("name"), row.string("stage")
+        if row.has("mass_kg") == row.has("inertia_kg_cm2"):
+            raise row.error("mass_kg", "give the member's mass_kg (a linear stage) or its inertia_kg_cm2 "
+                                       "(an angular stage), one of them")
+        # as moving_mass_kg; inertias as a rotor's (catalogue.py: to 1e6 kg cm^2)
+        inertia = row.number("mass_kg", min=0.0, max=1e3) if row.has("mass_kg") else \
+            row.number("inertia_kg_cm2", min=0.0, max=1e6) * 1e-4
+        members.append(Member(name, stage, inertia))
+        row.finish()
+    if len({x.name for x in members}) != len(members):
+        raise f.error("members", "two members have the same name")
     f.finish()
-    return DriveSpec(motor, Load(mass, gravity, tuple(forces)), limits, profile, tmin, tmax, belt, cord, service,
-                     allowable, tuple(resolved), f.file)
+    return DriveSpec(motor, Load(mass, gravity, tuple(forces), tuple(members)), limits, profile, tmin, tmax, belt,
+                     cord, service, allowable, tuple(resolved), f.file)
 

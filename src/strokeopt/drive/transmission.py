@@ -68,6 +68,83 @@ class Transmission:
         (phi,) = evaluate(self._inverse_function(), x)
         return phi
 
+    def chain(self) -> list[tuple[str, object, str]]:
+        """The members the transmission moves, motor side first, as ``(name, map, unit)``: ``map`` takes
+        the previous member's coordinate (the motor angle for the first) to this one's, with CasADi
+        operations; the last member is the load; ``unit`` is "m" or "rad". A constant-ratio drive has
+        one member, the load; a chain (screw, lever) lists each."""
+        return [("load", self.position, "m")]
+
+    def stages(self, phi) -> list[tuple[str, object, str]]:
+        """Every member's coordinate as a CasADi expression of the motor angle ``phi``: ``(name, q, unit)``."""
+        out, q = [], phi
+        for name, step, unit in self.chain():
+            q = step(q)
+            out.append((name, q, unit))
+        return out
+
+    def stage_map(self, start: str, end: str, q):
+        """The coordinate of member ``end`` from that of member ``start`` (``"motor"``: the motor angle),
+        composing the chain's maps between them; ``end`` must come after ``start``."""
+        names = ["motor"] + [name for name, _, _ in self.chain()]
+        i, j = names.index(start), names.index(end)
+        if j <= i:
+            raise ValueError(f"{end!r} does not follow {start!r} in the {self.name} ({' -> '.join(names)})")
+        for _, step, _ in self.chain()[i:j]:
+            q = step(q)
+        return q
+
+    def stage_unit(self, name: str) -> str:
+        return "rad" if name == "motor" else next(u for n, _, u in self.chain() if n == name)
+
+    def stage_names(self) -> list[str]:
+        return [name for name, _, _ in self.stages(ca.SX.sym("phi"))]
+
+    def _stage_functions(self):
+        """``phi -> [q, dq/dphi, d2q/dphi2, d3q/dphi3]`` of every stage (AD), and of the load last."""
+        if not hasattr(self, "_stage_fns"):
+            phi = ca.SX.sym("phi")
+            outs = []
+            for _, q, _ in self.stages(phi) + [("", self.position(phi), "")]:
+                d1 = ca.jacobian(q, phi)
+                d2 = ca.jacobian(d1, phi)
+                outs += [q, d1, d2, ca.jacobian(d2, phi)]
+            self._stage_fns = ca.Function(f"{self.name}_stages", [phi], outs)
+        return self._stage_fns
+
+    def stage_transfer(self, phi) -> dict:
+        """``{stage: (dq/dphi, d2q/dphi2)}`` at motor angles ``phi``: numpy for numbers, CasADi for symbols."""
+        if isinstance(phi, (ca.SX, ca.MX)):
+            vals = self._stage_functions()(phi)
+        else:
+            vals = evaluate(self._stage_functions(), phi)
+        return {name: (vals[4 * k + 1], vals[4 * k + 2]) for k, name in enumerate(self.stage_names())}
+
+    def stage_kinematics(self, x, v, a, j) -> dict:
+        """Position, speed, acceleration and jerk of the motor and of every stage for a sampled load
+        motion ``x, v, a, j`` (numpy): ``{"motor": (phi, omega, eps, jerk), name: (q, dq, ddq, dddq), ...}``,
+        time derivatives by the chain rule with AD derivatives of the position functions (the motor's
+        jerk from ``j = mu jerk + 3 nu omega eps + x3 omega^3``, x3 the third derivative of x(phi))."""
+        x, v, a, j = (np.asarray(y, dtype=float) for y in (x, v, a, j))
+        phi = self.motor_angle(x)
+        vals = [np.asarray(o).reshape(phi.shape) for o in evaluate(self._stage_functions(), phi)]
+        _, mu, nu, x3 = vals[-4:]
+        omega = v / mu
+        eps = (a - nu * omega**2) / mu
+        with np.errstate(invalid="ignore"):  # an unbounded jerk (a jump of acceleration) stays unbounded
+            jerk = (j - 3 * nu * omega * eps - x3 * omega**3) / mu
+        out = {"motor": (phi, omega, eps, jerk)}
+        for k, name in enumerate(self.stage_names()):
+            q, d1, d2, d3 = vals[4 * k: 4 * k + 4]
+            with np.errstate(invalid="ignore"):
+                out[name] = (q, d1 * omega, d1 * eps + d2 * omega**2,
+                             d1 * jerk + 3 * d2 * omega * eps + d3 * omega**3)
+        return out
+
+    def range_error(self, x_min: float, x_max: float) -> str | None:
+        """Why the load positions ``x_min..x_max`` [m] are outside what this transmission can reach, or None."""
+        return None
+
     def motor_kinematics(self, x, v, a):
         """Motor angle, speed and acceleration [rad, rad/s, rad/s^2] for a load motion.
 
@@ -192,23 +269,66 @@ class ScrewLever(Transmission):
     The motor turns a screw of lead ``s``; the nut moves ``x2 = s/(2 pi) phi``
     and tilts a lever, ``phi4 = atan(x2/R0)``; the lever's other arm, at
     ``offset`` [rad] to the first, moves the sleeve ``x6 = R0P tan(phi4 + offset)``
-    (minus its value at phi = 0, so x6(0) = 0).
+    (minus its value at phi = 0, so x6(0) = 0). Each stage is written once
+    (:meth:`nut_position`, :meth:`lever_angle`, :meth:`sleeve_position`): the position function,
+    the stages' kinematics and the elastic model's couplings all use them. ``inertia`` is the
+    screw's [kg m^2].
     """
 
     name = "screw_lever"
 
-    def __init__(self, lead: float, R0: float, R0P: float, offset: float = 0.0, inertia: float = 0.0):
+    def __init__(self, lead: float, R0: float, R0P: float, offset: float = 0.0, inertia: float = 0.0,
+                 screw_diameter: float | None = None, thread_friction: float = 0.15, thread_angle: float = math.radians(30)):
         if not (lead > 0 and R0 > 0 and R0P > 0):
             raise ValueError("lead and lever arms must be positive")
         self.lead, self.R0, self.R0P, self.offset, self.inertia = (float(lead), float(R0), float(R0P),
                                                                    float(offset), float(inertia))
+        self.screw_diameter, self.thread_friction, self.thread_angle = screw_diameter, thread_friction, thread_angle
+
+    def screw_torque(self, force):
+        """Torque [N m] that turns the screw against an axial nut force ``force`` [N] (raising the load,
+        the worse sense): ``F d2/2 tan(lambda + rho')`` with the lead angle ``lambda = atan(s / (pi d2))``
+        and the friction angle of the thread flanks ``rho' = atan(mu / cos(beta/2))`` (``screw_diameter``
+        d2 = pitch diameter, ``thread_friction`` mu, ``thread_angle`` beta: 30 deg trapezoidal)."""
+        lam = math.atan(self.lead / (math.pi * self.screw_diameter))
+        rho = math.atan(self.thread_friction / math.cos(self.thread_angle / 2))
+        return force * self.screw_diameter / 2 * math.tan(lam + rho)
+
+    def nut_position(self, phi):
+        """x2 [m] of the nut for the screw angle ``phi`` [rad]."""
+        return self.lead / (2 * math.pi) * phi
+
+    def lever_angle(self, x2):
+        """phi4 [rad] of the lever for the nut position ``x2`` [m] (phi4 = atan(x2/R0), sources B)."""
+        return ca.atan(x2 / self.R0)
+
+    def sleeve_position(self, phi4):
+        """x6 [m] of the sleeve for the lever angle ``phi4`` [rad] (x6 = R0P tan(phi4P), phi4P = phi4 + offset)."""
+        return self.R0P * (ca.tan(phi4 + self.offset) - math.tan(self.offset))
 
     def position(self, phi):
-        x2 = self.lead / (2 * math.pi) * phi
-        phi4 = ca.atan(x2 / self.R0)
-        return self.R0P * (ca.tan(phi4 + self.offset) - math.tan(self.offset))
+        return self.sleeve_position(self.lever_angle(self.nut_position(phi)))
+
+    def chain(self):
+        return [("nut", self.nut_position, "m"), ("lever", self.lever_angle, "rad"), ("sleeve", self.sleeve_position, "m")]
 
     def inverse_position(self, x):
         phi4 = ca.atan(x / self.R0P + math.tan(self.offset)) - self.offset
         return 2 * math.pi / self.lead * self.R0 * ca.tan(phi4)
 
+    def range_error(self, x_min: float, x_max: float) -> str | None:
+        """The lever (both arms) within +-:data:`LEVER_LIMIT_DEG`: beyond it tan() runs away and the
+        nut no longer tilts the lever (the mechanism's own limit is far inside)."""
+        for x in (x_min, x_max):
+            phi4 = math.atan(x / self.R0P + math.tan(self.offset)) - self.offset
+            for angle in (phi4, phi4 + self.offset):
+                if abs(math.degrees(angle)) > LEVER_LIMIT_DEG:
+                    return (f"the sleeve position {x * 1e3:g} mm turns the lever to {math.degrees(angle):.1f} deg, "
+                            f"past +-{LEVER_LIMIT_DEG:g} deg")
+        return None
+
+
+#: The lever angle a screw-lever transmission may reach [deg] (both arms): tan() of the sleeve arm
+#: grows without bound toward 90 deg; at 80 deg one step of the motor moves the sleeve 33 times as
+#: far as at 0 deg -- a toggle, no longer a transmission.
+LEVER_LIMIT_DEG = 80.0

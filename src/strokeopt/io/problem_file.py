@@ -8,6 +8,7 @@ through :class:`~strokeopt.io.fields.Fields`.
 
 from __future__ import annotations
 
+import math
 import tomllib
 from dataclasses import replace
 from pathlib import Path
@@ -16,7 +17,7 @@ from ..contact.model import parse_model
 from ..contact.scene import parse_scenes
 from ..design.settings import parse_design
 from ..drive.spec import parse_drive
-from ..drive.transmission import PROFILE_PITCH, TEETH_RANGE, BeltPulley
+from ..drive.transmission import PROFILE_PITCH, TEETH_RANGE, BeltPulley, ScrewLever, Transmission
 from ..errors import ProblemError
 from ..motion.laws import LAW_NAMES, LAW_PARAMETERS, MotionLaw, make_law
 from ..motion.timing import INTERVAL_TIMES, Interval, TimingDiagram
@@ -68,16 +69,21 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
     timing = _read_timing(top.table("timing"), default_law, revs)
     _check_cycle(machine, timing, spm)
 
-    trans = top.table("transmission")
-    trans.string("type", "belt_pulley", choices=("belt_pulley",))
-    profile = trans.string("profile", "GT3", choices=tuple(PROFILE_PITCH))
-    teeth = trans.number("pulley_teeth", integer=True, min=TEETH_RANGE[0], max=TEETH_RANGE[1])
-    trans.finish()
+    transmission = _read_transmission(top.table("transmission"), timing)
 
-    model = parse_model(top.table("model", required=False))
+    model = parse_model(top.table("model", required=False), transmission)
     scenes = parse_scenes(top.table("scenes", required=False), model)
     drive_table = top.table("drive", required=False)
     drive = parse_drive(drive_table, (path or Path(file)).parent) if drive_table is not None else None
+    if model is not None and model.transmission is not None and timing.intervals[0].start_position != 0:
+        raise ProblemError(file, "timing.start_position_mm", "a model on the transmission's members starts at the "
+                                                             "transmission's zero: start_position_mm must be 0")
+    if drive is not None:
+        stages = transmission.stage_names()
+        for k, member in enumerate(drive.load.members):
+            if member.stage not in stages:
+                raise ProblemError(file, f"drive.members[{k + 1}].stage", f"{member.stage!r} is no stage of the "
+                                                                         f"{transmission.name}: {', '.join(stages)}")
     design_table = top.table("design", required=False)
     design = parse_design(design_table) if design_table is not None else None
     servo_table = top.table("servo", required=False)
@@ -90,7 +96,7 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
         spm=spm,
         timing=timing,
         default_law=default_law,
-        transmission=BeltPulley.toothed(teeth, profile),
+        transmission=transmission,
         data=data,
         model=model,
         scenes=scenes,
@@ -205,3 +211,39 @@ def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagra
         raise f.error("intervals", "more than one interval is marked handover = true")
     f.finish()
     return TimingDiagram(tuple(intervals), revs, times)
+
+
+def _optional_mm(f: Fields, key: str, lo: float, hi: float) -> float | None:
+    value = f.number(key, None, min=lo, max=hi)
+    return None if value is None else value * 1e-3
+
+
+def _read_transmission(trans: Fields, timing: TimingDiagram) -> Transmission:
+    """``[transmission]``: a toothed belt pulley (``pulley_teeth``), or a screw and lever (``lead_mm``,
+    ``lever_arm_mm`` R0, ``sleeve_arm_mm`` R0P, ``lever_offset_deg``, ``screw_inertia_kg_cm2``)."""
+    kind = trans.string("type", "belt_pulley", choices=("belt_pulley", "screw_lever"))
+    if kind == "belt_pulley":
+        profile = trans.string("profile", "GT3", choices=tuple(PROFILE_PITCH))
+        teeth = trans.number("pulley_teeth", integer=True, min=TEETH_RANGE[0], max=TEETH_RANGE[1])
+        trans.finish()
+        return BeltPulley.toothed(teeth, profile)
+    # leads of 0.1 mm (a fine adjusting screw) to 100 mm (a steep ball screw); lever arms of 1 mm to 1 m;
+    # the arms' offset within the lever's own range (transmission.LEVER_LIMIT_DEG); a screw of up to
+    # 1e4 kg cm^2 (a 100 mm steel shaft a metre long is 8e3 kg cm^2)
+    tr = ScrewLever(trans.number("lead_mm", min=0.1, max=100.0) * 1e-3,
+                    trans.number("lever_arm_mm", min=1.0, max=1e3) * 1e-3,
+                    trans.number("sleeve_arm_mm", min=1.0, max=1e3) * 1e-3,
+                    math.radians(trans.number("lever_offset_deg", 0.0, min=-80.0, max=80.0)),
+                    trans.number("screw_inertia_kg_cm2", 0.0, min=0.0, max=1e4) * 1e-4,
+                    # the screw torque from the nut force (contact/chain.py): pitch diameters 1-100 mm, flank
+                    # friction 0.01 (ball screw) to 1, flank angles 0 (square) to 90 deg (metric 60, Tr 30)
+                    _optional_mm(trans, "screw_diameter_mm", 1.0, 100.0),
+                    trans.number("thread_friction", 0.15, min=0.01, max=1.0),
+                    math.radians(trans.number("thread_angle_deg", 30.0, min=0.0, max=90.0)))
+    positions = [p for i in timing.intervals for p in (i.start_position, i.end_position)]
+    why = tr.range_error(min(positions), max(positions))
+    if why is not None:
+        raise trans.error("sleeve_arm_mm", f"the strokes of [timing] reach beyond the lever's range: {why}; "
+                                           "a longer arm or a shorter stroke")
+    trans.finish()
+    return tr

@@ -14,7 +14,7 @@ import numpy as np
 from ..contact.events import GAP_CLOSED, LAG_THRESHOLD
 from ..contact.studies import lag_onset_spm
 from .figures import frame_label
-from .format import drive_text
+from .format import drive_text, format_table
 
 # speeds are magnitudes (toward the handover); the gap is closed below GAP_CLOSED, the threshold 'premature' uses
 SWEEP_COLUMNS = [("spm", "spm"), ("impact_velocity_m_s", "impact speed m/s"), ("impact_angle_deg", "impact deg"),
@@ -60,6 +60,8 @@ def scene_text(problem, scene: str, summary: dict) -> str:
         lines.append(f"needle released at {s['release_angle_deg']:.2f} deg ({verdict})")
     if s["peak_pad_force_N"] is not None:
         lines.append(f"peak pad force: {s['peak_pad_force_N']:.1f} N")
+    if s.get("chain"):
+        return "\n".join(lines + chain_lines(s["chain"], sc.driven, s))
     belt = (f"; for comparison, not a check: the belt's breaking load is {s['belt_breaking_load_N']:g} N "
             f"({s['belt']}), which 'strokeopt solve' and 'size' check the rigid-load belt tension against"
             if s.get("belt_breaking_load_N") is not None else "")
@@ -73,6 +75,30 @@ def scene_text(problem, scene: str, summary: dict) -> str:
     sw = "hard switches" if s["smoothing_mm"] == 0 else f"smoothing {s['smoothing_mm']:g} mm"
     lines.append(f"CPU time {s['cpu_time_s']:.3f} s ({s['method']}, rtol {s['rtol']:g}, atol {s['atol']:g}, {sw})")
     return "\n".join(lines)
+
+
+def chain_lines(chain: dict, driven: str, s: dict) -> list[str]:
+    """A model on a transmission's members: elastic against rigid, the links' forces, the screw torque."""
+    lines = ["", format_table(chain["bodies"], [("body", "body"), ("stage", "member"), ("elastic_peak_accel", "elastic peak"),
+                                                ("rigid_peak_accel", "rigid peak"), ("ratio", "elastic/rigid"),
+                                                ("unit", "unit")],
+                              title="peak acceleration of each body: the elastic chain against the rigid chain")]
+    rows = [{**k, "damping_text": f"{k['damping']:.4g}" + (f" (log decrement {k['log_decrement']:.4g})"
+                                                              if k["log_decrement"] is not None else ""),
+             "clearance_text": f"{k['clearance']:.3g}"} for k in chain["links"]]
+    lines += ["", format_table(rows, [("link", "link"), ("peak_compression", "peak compression"),
+                                      ("peak_tension", "peak tension"), ("unit", "unit"), ("clearance_text", "play m|rad"),
+                                      ("damping_text", "damping SI")],
+                               title="link forces (positive = compression); a link's peak tension is what a preload "
+                                     "spring would have to hold to keep it closed")]
+    if "screw" in chain:
+        sc = chain["screw"]
+        lines.append(f"\nscrew torque from the peak nut force {sc['peak_nut_force_N']:.1f} N (drive force on the "
+                     f"{driven}): {sc['screw_torque_N_cm']:.2f} N cm (pitch diameter {sc['screw_diameter_mm']:g} mm, "
+                     f"friction {sc['thread_friction']:g}, flank angle {sc['thread_angle_deg']:g} deg, raising)")
+    sw = "hard switches" if s["smoothing_mm"] == 0 else f"smoothing {s['smoothing_mm']:g} mm"
+    lines.append(f"CPU time {s['cpu_time_s']:.3f} s ({s['method']}, rtol {s['rtol']:g}, atol {s['atol']:g}, {sw})")
+    return lines
 
 
 def plot_scene(r, path=None):
@@ -178,5 +204,43 @@ def plot_tolerance_study(study: dict, path=None):
     fig.suptitle(f"work-precision, scene {study['scene']} at {study['spm']:g} spm")
     if path is not None:
         fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig
+
+
+def plot_chain(r, problem, stroke, path=None):
+    """A model on a transmission's members: each staged free body's acceleration against the rigid
+    chain's (its member's, from the stroke), and the links' forces, over the time of the moves."""
+    model = problem.model
+    tr = model.transmission
+    sc = problem.scenes[r.scene]
+    kin = stroke.evaluate(r.t)
+    rigid = tr.stage_kinematics(kin.s, kin.v, kin.a, kin.j)
+    free = [b for b in sc.free_bodies if model.bodies[b].stage is not None]
+    links = [e for e in sc.elements if model.elements[e].kind == "link"]
+    fig, axes = plt.subplots(len(free) + 1, 1, sharex=True, figsize=(10, 2.4 * (len(free) + 1)),
+                             constrained_layout=True)
+    ms = r.t * 1e3
+    for ax, b in zip(axes, free):
+        body = model.bodies[b]
+        unit = "rad/s$^2$" if body.angular else "m/s$^2$"
+        ax.plot(ms, r.accelerations[b], lw=0.9, label=f"{b} (elastic)")
+        ax.plot(ms, rigid[body.stage][2], "k--", lw=1.0, label=f"rigid chain ({body.stage})")
+        ax.set_ylabel(f"{b}\n[{unit}]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right")
+    ax = axes[-1]
+    for e in links:
+        angular = any(model.bodies[b].angular for b in model.elements[e].bodies if b in model.bodies)
+        scale, unit = (100.0, "N cm") if angular else (1.0, "N")
+        ax.plot(ms, np.asarray(r.forces[e]) * scale, lw=0.9, label=f"{e} [{unit}]")
+    ax.set_ylabel("link force\n(+ compression)")
+    ax.set_xlabel("time [ms]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, loc="upper right")
+    axes[0].set_title(f"{problem.name}: scene {r.scene!r}, {r.stroke_label}: elastic chain against the rigid chain",
+                      fontsize=10)
+    if path is not None:
+        fig.savefig(path, dpi=110)
         plt.close(fig)
     return fig

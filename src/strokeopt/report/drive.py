@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+import casadi as ca
 import matplotlib.pyplot as plt
 import numpy as np
 
@@ -18,6 +19,8 @@ from .format import format_table, period_text
 def sizing_verdict(sizing) -> str:
     """One line: the best pair, or why none passes (the binding limit of the pair closest to passing)."""
     best = sizing.candidates[0]
+    if best.stepper:
+        return stepper_verdict(best)
     b = best.check(best.binding)
     what = (f"{b.name} {b.value:.4g} {b.unit} against the limit {b.limit:.4g} {b.unit} "
             f"(margin {b.margin:.3g})")
@@ -43,6 +46,8 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
     ``report`` is ``sizing.to_dict(explain)``, with a ``"continuous_radius"`` list of
     :meth:`~strokeopt.drive.sizing.RadiusOptimum.row` when that was asked for.
     """
+    if sizing.candidates[0].stepper:
+        return stepper_text(sizing, report, explain)
     with_max_spm = sizing.max_spm_resolution is not None
     inp = report["inputs"]
     forces = "; ".join(f"{f['name']} ({f['kind']}, {f['force_N']:g} N + {f['stiffness_N_m']:g} N/m "
@@ -159,11 +164,92 @@ def plot_sizing(sizing, candidate=None, path=None):
     terms = sizing.torque_curve(c)
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.8), constrained_layout=True)
     m = c.motor
-    draw_torque_speed(ax1, m, terms.omega, terms.total, sizing.kinematics.t, sizing.limits,
-                      f"{m.name}, pulley z{c.pulley.teeth}, {sizing.spm:g} spm, {sizing.inputs['law']}")
+    if c.stepper:
+        draw_pull_out(ax1, m, terms.omega, terms.total, sizing.limits,
+                      f"{m.name}, {c.pulley.name}, {sizing.spm:g} spm, {sizing.inputs['law']}")
+    else:
+        draw_torque_speed(ax1, m, terms.omega, terms.total, sizing.kinematics.t, sizing.limits,
+                          f"{m.name}, pulley z{c.pulley.teeth}, {sizing.spm:g} spm, {sizing.inputs['law']}")
     draw_torque_terms(ax2, 360.0 * sizing.kinematics.t / sizing.period, terms,
                       f"torque over the cycle (binding: {c.binding})")
     if path is not None:
         fig.savefig(path, dpi=110)
         plt.close(fig)
     return fig
+
+
+def stepper_verdict(c) -> str:
+    """The answer to "is the stepper at its limit?": the least pull-out reserve, where, and the binding check."""
+    po, w = c.check("pull_out_torque"), c.worst
+    where = (f"{w['worst_torque_N_m']:.3g} N m demanded at {w['worst_step_rate_Hz']:.0f} Hz where the pull-out "
+             f"torque is {w['worst_pull_out_N_m']:.3g} N m ({po.value:.0f} % of it; allowed {po.limit:.0f} % with "
+             f"safety factor {100 / po.limit:g})")
+    b = c.check(c.binding)
+    binding = f"binding: {b.name} {b.value:.4g} {b.unit} against {b.limit:.4g} {b.unit} (margin {b.margin:.3g})"
+    if c.feasible:
+        state = "ok, with reserve" if b.margin > 0.2 else "ok, at its limit"
+        return f"{state}: {c.motor.name} on the {c.pulley.name}: {where}; {binding}"
+    over = "beyond its pull-out curve (it loses steps)" if po.value > 100 else "inside its pull-out curve " \
+        "but without the safety factor's reserve"
+    return f"infeasible: {c.motor.name} on the {c.pulley.name} is {over}: {where}; {binding}"
+
+
+def stepper_text(sizing, report: dict, explain: bool = False) -> str:
+    """``strokeopt size`` for steppers: the demand against the pull-out curve, the step rate, the inertia ratio."""
+    inp = report["inputs"]
+    c0 = sizing.candidates[0]
+    units = {name: "kg" if unit == "m" else "kg m^2" for name, _, unit in
+             c0.pulley.transmission().stages(ca.SX.sym("phi"))}
+    lines = [
+        f"{report['problem']} at {report['spm']:g} spm ({period_text(report['cycle_time_s'], report['spm'])}, "
+        f"{inp['law']}, {inp['samples']} samples over the whole cycle)",
+        f"load: {inp['moving_mass_kg']:g} kg at the load, gravity {inp['gravity_m_s2']:g} m/s^2; members: "
+        + ("; ".join(f"{m.name} ({m.inertia:g} {units[m.stage]} on the {m.stage})" for m in sizing.load.members)
+           or "none"),
+        f"checks: torque demand T = J(phi) phi'' + 1/2 J'(phi) phi'^2 + loads under the pull-out curve / "
+        f"{sizing.limits.pull_out_safety_factor:g} at every speed; step rate under the curve's last; inertia "
+        f"ratio <= {sizing.limits.max_inertia_ratio:g}",
+        f"motor data: {c0.motor.model} ({c0.motor.source or 'no source'}{': ' + c0.motor.note if c0.motor.note else ''})\n",
+    ]
+    cols = [("motor", "motor"), ("peak_torque_N_m", "peak N m"), ("pull_out_pct", "% of pull-out"),
+            ("pull_out_limit_pct", "allowed %"), ("worst_step_rate_Hz", "at Hz"), ("step_rate_Hz", "step rate Hz"),
+            ("max_step_rate_Hz", "max Hz"), ("inertia_ratio", "J ratio"), ("feasible", "feasible"),
+            ("binding", "binding"), ("margin", "margin")]
+    if sizing.max_spm_resolution is not None:
+        cols += [("max_spm", "max spm"), ("max_spm_binding", "limited by")]
+    lines.append(format_table(report["candidates"], cols))
+    if sizing.max_spm_resolution is not None and c0.max_spm is not None:
+        scale = sizing.spm / c0.max_spm  # every interval's time scales with the cycle
+        lines.append(f"\nmax spm: bisection to {sizing.max_spm_resolution:g} spm (rounded down); at {c0.max_spm:g} spm every "
+                     f"interval takes {scale:.3g} x its time at {sizing.spm:g} spm")
+    if explain:
+        for c in sizing.candidates:
+            lines.append(f"\nmotor torque of {c.motor.name} at its peak ({c.peak_angle_deg:.1f} deg), by term [N m]:")
+            lines.append(format_table([c.peak_terms], [(k, k) for k in c.peak_terms]))
+            lines.append(format_table([x.as_dict() for x in c.checks], [("name", "check"), ("value", "value"),
+                                      ("limit", "limit"), ("unit", "unit"), ("margin", "margin"), ("ok", "ok")]))
+    lines.append(f"\n{report['verdict']}" if "verdict" in report else "")
+    return "\n".join(lines).rstrip()
+
+
+def draw_pull_out(ax, motor, omega, torque, limits, title: str) -> None:
+    """A stepper's torque-speed picture: the demand's path (|speed| in step rate, |torque|) over the
+    pull-out curve and the curve divided by the safety factor; the point of least reserve marked."""
+    rate = np.abs(np.asarray(omega, float)) / motor.step_angle
+    torque = np.abs(np.asarray(torque, float))
+    table = np.asarray(motor.pull_out_speed) / motor.step_angle
+    ax.plot(table, motor.pull_out_torque, "o-", color="tab:red", ms=3, label=f"pull-out ({motor.source or 'data'})")
+    ax.plot(table, np.asarray(motor.pull_out_torque) / limits.pull_out_safety_factor, ":", color="tab:red",
+            label=f"pull-out / {limits.pull_out_safety_factor:g} (the check)")
+    ax.axvline(table[-1], color="0.5", lw=0.8, ls="--", label=f"max step rate {table[-1]:.0f} Hz")
+    ax.plot(rate, torque, color="tab:blue", lw=1.2, label="demand over the cycle")
+    from ..drive.checks import pull_out_ratio
+
+    i = int(np.argmax(pull_out_ratio(torque, omega, motor)))
+    ax.plot(rate[i], torque[i], "o", color="tab:blue", ms=7,
+            label=f"least reserve: {torque[i]:.3f} N m at {rate[i]:.0f} Hz")
+    ax.set_xlabel("step rate [Hz] (|motor speed| / step angle)")
+    ax.set_ylabel("|motor torque| [N m]")
+    ax.set_title(title, fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, loc="best")

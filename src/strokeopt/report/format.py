@@ -55,7 +55,8 @@ def format_table(rows: list[dict], columns: list[tuple[str, str]], title: str = 
 def drive_text(drive: dict) -> str:
     """The line every report has: which motor and pulley it used and where they come from."""
     teeth = drive.get("pulley_teeth")
-    pulley = f"pulley {teeth} teeth" if teeth is not None else "continuous pulley radius"
+    pulley = f"pulley {teeth} teeth" if teeth is not None else \
+        drive.get("transmission") or "continuous pulley radius"
     return f"drive: motor {drive.get('motor') or '(none)'}, {pulley} (from {drive['from']})"
 def period_text(cycle_s: float, spm: float) -> str:
     """The cam cycle and the stitch period, both named: 'cam cycle 200.0 ms = 2 stitches of 100.0 ms'."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import casadi as ca
 import matplotlib.pyplot as plt
 import numpy as np
 
@@ -13,8 +14,12 @@ from .figures import frame_label, shade_dwells
 from .format import format_table, period_text
 
 
-def kinematics_summary(problem, stroke: StrokeFunction, spm: float) -> dict:
-    """Peaks per interval of the bar and of the pulley, as the kinematics command reports them."""
+def kinematics_summary(problem, stroke: StrokeFunction, spm: float, step_angle: float | None = None) -> dict:
+    """Peaks per interval of the bar and of the pulley, as the kinematics command reports them; a
+    transmission without a pulley radius (a screw and lever) reports its members and the motor
+    instead (:func:`member_peaks`, with the step rate when ``step_angle`` [rad] of a stepper is given)."""
+    if not hasattr(problem.transmission, "radius"):
+        return _member_summary(problem, stroke, spm, step_angle)
     r = problem.transmission.radius
     sch = problem.timing.schedule(spm)
     peaks = stroke.piece_peaks()
@@ -58,6 +63,55 @@ def kinematics_summary(problem, stroke: StrokeFunction, spm: float) -> dict:
     }
 
 
+def member_peaks(transmission, stroke: StrokeFunction, step_angle: float | None = None,
+                 samples: int = 4001) -> list[list[dict]]:
+    """Per piece of ``stroke``, the peaks of |speed|, |acceleration|, |jerk| of the motor and of every
+    member of ``transmission`` (:meth:`~strokeopt.drive.transmission.Transmission.stage_kinematics`),
+    and the motor's peak step rate [Hz] with ``step_angle`` [rad]. Jerk is unbounded (inf) where the
+    stroke's is (:meth:`~strokeopt.motion.stroke.StrokeFunction.piece_peaks`)."""
+    units = {"motor": "rad"} | {name: unit for name, _, unit in transmission.stages(ca.SX.sym("phi"))}
+    out = []
+    for piece, peak in zip(stroke.pieces, stroke.piece_peaks()):
+        tau = np.linspace(0.0, piece.duration, samples)
+        x, v, a, j = piece.derivatives(tau)
+        rows = []
+        for name, (_, dq, ddq, dddq) in transmission.stage_kinematics(x, v, a, j).items():
+            jerk = math.inf if math.isinf(peak.j_max) else float(np.max(np.abs(dddq)))
+            row = {"member": name, "unit": units[name], "v_max": float(np.max(np.abs(dq))),
+                   "a_max": float(np.max(np.abs(ddq))), "jerk_max": jerk}
+            if name == "motor" and step_angle is not None:
+                row["step_rate_max_Hz"] = row["v_max"] / step_angle
+            rows.append(row)
+        out.append(rows)
+    return out
+
+
+def _member_summary(problem, stroke: StrokeFunction, spm: float, step_angle: float | None) -> dict:
+    sch = problem.timing.schedule(spm)
+    intervals, moves = [], []
+    for itv, members, t0, dur in zip(problem.timing.intervals, member_peaks(problem.transmission, stroke, step_angle),
+                                     sch.t_start, sch.duration):
+        row = {"index": itv.index, "name": itv.name, "kind": "move" if itv.is_move else "dwell",
+               "law": itv.law.label if itv.is_move else None, "stroke_mm": abs(itv.stroke) * 1e3,
+               "direction": ("up" if itv.stroke > 0 else "down") if itv.is_move else None,
+               "span_deg": 360.0 * dur / sch.period, "span_nominal_deg": itv.span_deg,
+               "start_angle_deg": 360.0 * t0 / sch.period, "end_angle_deg": 360.0 * (t0 + dur) / sch.period,
+               "time_s": dur, "members": members}
+        intervals.append(row)
+        if itv.is_move:
+            moves.append({"index": itv.move_index, "interval": itv.index, **{k: v for k, v in row.items() if k != "index"}})
+    return {"problem": problem.name, "spm": spm, "cycle_time_s": sch.period, "stitch_period_s": 60.0 / spm,
+            "interval_times": problem.timing.interval_times,
+            "law": problem.default_law.name if len({m.law for m in problem.timing.moves}) == 1 else "mixed",
+            "law_params": problem.default_law.params, "transmission": problem.transmission.name,
+            "step_angle_deg": None if step_angle is None else math.degrees(step_angle),
+            "moves": moves, "intervals": intervals}
+
+
+MEMBER_COLUMNS = [("interval", "interval"), ("member", "member"), ("v_max", "speed max"), ("a_max", "accel max"),
+                  ("jerk_max", "jerk max"), ("unit", "unit (/s, /s2, /s3)"), ("step_rate_max_Hz", "step rate Hz")]
+
+
 KINEMATICS_COLUMNS = [
     ("index", "#"), ("name", "interval"), ("stroke_mm", "stroke mm"), ("span_deg", "span deg"),
     ("time_ms", "interval time ms"), ("v_max_m_s", "v_max m/s"), ("a_max_m_s2", "a_max m/s2"),
@@ -67,6 +121,8 @@ KINEMATICS_COLUMNS = [
 
 
 def kinematics_text(summary: dict) -> str:
+    if "members" in summary["intervals"][0]:
+        return _member_text(summary)
     head = (f"{summary['problem']} at {summary['spm']:g} spm ({period_text(summary['cycle_time_s'], summary['spm'])}, "
             f"interval times {summary['interval_times']}), pulley {summary['pulley_teeth']} teeth, "
             f"PD {summary['pulley_pitch_diameter_mm']:.2f} mm")
@@ -74,6 +130,20 @@ def kinematics_text(summary: dict) -> str:
     head += "\nmotion law: " + ", ".join(laws)
     rows = [{**r, "time_ms": r["time_s"] * 1e3} for r in summary["intervals"]]
     return head + "\n\n" + format_table(rows, KINEMATICS_COLUMNS)
+
+
+def _member_text(summary: dict) -> str:
+    head = (f"{summary['problem']} at {summary['spm']:g} spm ({period_text(summary['cycle_time_s'], summary['spm'])}, "
+            f"interval times {summary['interval_times']}), transmission {summary['transmission']}")
+    head += "\nmotion law: " + ", ".join(sorted({m["law"] for m in summary["moves"]}))
+    rows = [{**r, "time_ms": r["time_s"] * 1e3} for r in summary["intervals"]]
+    cols = [c for c in KINEMATICS_COLUMNS if c[0] in ("index", "name", "stroke_mm", "span_deg", "time_ms")]
+    members = [{"interval": m["name"], **row} for m in summary["moves"] for row in m["members"]]
+    step = summary["step_angle_deg"]
+    note = (f"\nmotor and members in their own units (m or rad); step rate at {step:g} deg per step"
+            if step is not None else "\nmotor and members in their own units (m or rad)")
+    return (head + "\n\n" + format_table(rows, cols) + "\n\n" + format_table(members, MEMBER_COLUMNS
+            if step is not None else MEMBER_COLUMNS[:-1]) + note)
 
 
 def plot_kinematics(problem, strokes, spm: float, path: str | Path | None = None, n: int = 3601):
