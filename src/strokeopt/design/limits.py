@@ -39,6 +39,9 @@ class LimitGroup:
     #: False, or a function of the solve's request returning False: the rows exist (one NLP
     #: structure for every solve) but their bound is infinite
     enforced: Any = True
+    #: None, or a function of ``need`` giving the whole message of a violation (a limit a plain
+    #: "needs X, limit Y" does not say well, e.g. a lower bound)
+    describe: Any = None
 
     @property
     def short(self) -> str:

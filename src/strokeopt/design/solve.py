@@ -36,6 +36,7 @@ from dataclasses import replace
 import casadi as ca
 
 from .collocation import Mesh
+from .contact_limits import CONTACT_LIMITS
 from .fine_grid import move_results
 from .limits import DRIVE_LIMITS, MOVE_LIMITS
 from .nlp import prepare
@@ -222,8 +223,14 @@ def _report_checks(best: Outcome) -> tuple[list[dict], list[str]]:
     checks += [dict(c) for c in best.fine.get("drive_checks", [])]
     if req.drive is not None:
         checks += [row for lim in DRIVE_LIMITS for row in lim.report(nlp, best)]
+    checks += [row for lim in CONTACT_LIMITS for row in lim.report(nlp, best)]
     for c in checks:
         value, limit = float(c["value"]), float(c["limit"])
+        if c.pop("lower", False):  # a lower bound (a contact force): the margin is what it has above the limit
+            scale = max(abs(limit), 1.0)
+            c["margin"] = (value - limit) / scale
+            c["ok"] = bool(value >= limit - tol * scale)
+            continue
         c["margin"] = 1.0 - value / limit if limit > 0 else (-math.inf if value > 0 else 0.0)
         c["ok"] = bool(value <= limit * (1 + tol))
     active = []

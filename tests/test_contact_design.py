@@ -1,0 +1,112 @@
+"""Contact-aware design ([design.contact], design/contact_limits.py): the follower kept on the driven body and
+the impact velocity held in the collocation, each confirmed by the full simulation (contact/simulate.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from strokeopt import ProblemError, SolverError, load_problem, simulate_scene
+from strokeopt.cli.main import main
+from strokeopt.contact.cluster import build_cluster
+from strokeopt.design.solve import solve_design
+
+#: the thesis drive (055U2B30 on 28 teeth, thesis 4.6) with the modified sine's jerk bound of the reference file
+THESIS_DRIVE = ['design.motor_choice="fixed"', 'design.pulley="fixed"']
+
+
+def contact_problem(write_problem, contact: str, overrides=(), name="contact.toml"):
+    path = write_problem(lambda text: text + "\n[design.contact]\n" + contact + "\n", name)
+    return load_problem(path, [*THESIS_DRIVE, *overrides]), path
+
+
+def min_force(problem, stroke, element="c21"):
+    """The smallest derived contact force over the cycle wherever the cluster holds (the design's margin)."""
+    sc = problem.scenes["release"]
+    cl = build_cluster(sc)
+    t = np.linspace(0, stroke.period, 20001)
+    k = stroke.evaluate(t)
+    s, v, a = (np.asarray(x, float).ravel() for x in (k.s, k.v, k.a))
+    from strokeopt.contact.simulate import drive_reference
+
+    sign, s_ref = drive_reference(problem)
+    xd = sign * (s - s_ref)
+    force = cl.contact_force(element, xd, sign * v, sign * a)
+    return float(np.min(force[cl.holds(element, xd)]))
+
+
+def test_stock_spring_at_600_spm_is_infeasible_and_says_by_how_much(write_problem):
+    problem, _ = contact_problem(write_problem, 'keep_closed = ["c21"]\nmin_contact_force_N = 0.0')
+    with pytest.raises(SolverError) as err:
+        solve_design(problem, spm=600)
+    first = str(err.value).splitlines()[0]
+    assert "contact c21 opens: the control needs" in first and "N more than the springs give at rest (4.49 N)" in first
+
+
+@pytest.mark.slow  # three solves and three simulations
+def test_a_stroke_meeting_the_margin_does_not_lag_one_violating_it_does(write_problem):
+    problem, _ = contact_problem(write_problem, 'keep_closed = ["c21"]\nmin_contact_force_N = 0.5')
+    design = solve_design(problem, spm=380)
+    assert min_force(problem, design.stroke) >= 0.5 - 0.01  # the limit holds between the nodes too
+    row = next(c for c in design.checks if c["name"] == "contact c21 force (kept closed)")
+    assert row["ok"] and row["value"] >= 0.5 - 1e-6
+    sim = simulate_scene(problem, "release", 380, stroke=design.stroke)
+    assert not sim.metrics["lag"] and sim.metrics["max_lag_mm"] < 1e-3
+    # the modified sine at the same rate violates the margin (its force drops below zero): it lags
+    law = problem.stroke(380)
+    assert min_force(problem, law) < 0
+    sim_law = simulate_scene(problem, "release", 380, stroke=law)
+    assert sim_law.metrics["lag"] and sim_law.metrics["max_lag_mm"] > 0.01
+
+
+@pytest.mark.slow
+def test_impact_velocity_is_a_pinned_limit_confirmed_by_the_simulation(write_problem):
+    problem, _ = contact_problem(write_problem, 'keep_closed = ["c21"]\nmin_contact_force_N = 0.0\n'
+                                                'impact_velocity_max_m_s = 1.5')
+    design = solve_design(problem, spm=380)
+    row = next(c for c in design.checks if c["name"] == "impact velocity (pad)")
+    assert row["ok"] and row["value"] == pytest.approx(1.5, abs=0.005)
+    assert "impact velocity move 1" in design.active_constraints
+    sim = simulate_scene(problem, "release", 380, stroke=design.stroke)
+    assert sim.metrics["impact_velocity_m_s"] == pytest.approx(1.5, abs=0.02)  # the cluster meets the pad as designed
+
+
+def test_no_contact_section_builds_no_contact_rows(reference):
+    from strokeopt.design.nlp import prepare
+    from strokeopt.design.request import DriveChoice, DriveSetup, SolveRequest
+
+    settings = reference.design
+    assert settings.contact is None
+    drive = DriveSetup(reference, settings)
+    req = SolveRequest(reference, 500, settings, settings.mesh, "min_peak_torque", drive,
+                       DriveChoice(drive.fixed_motor(), 28))
+    nlp = prepare(req)
+    assert req.contact is None
+    assert not [lim for lim, _ in nlp.built.limits if "closed" in lim.name or "impact" in lim.name]
+
+
+@pytest.mark.parametrize("contact, field, words", [
+    ('keep_closed = ["c99"]', "design.contact.keep_closed", "unknown element 'c99'"),
+    ('keep_closed = ["k2"]', "design.contact.keep_closed", "'k2' is a spring"),
+    ('keep_closed = ["c32"]', "design.contact.keep_closed", "does not touch the driven body's cluster"),
+    ('keep_closed = ["c21"]\nscene = "nowhere"', "design.contact.scene", "no scene 'nowhere'"),
+    ('keep_closed = ["c21"]\nmin_contact_force_N = -1', "design.contact.min_contact_force_N", "plausible range"),
+    ('keep_closed = "c21"', "design.contact.keep_closed", "must be an array"),
+])
+def test_bad_contact_input_names_the_field(write_problem, capsys, contact, field, words):
+    path = write_problem(lambda text: text + "\n[design.contact]\n" + contact + "\n")
+    with pytest.raises(ProblemError) as err:
+        load_problem(path)
+    assert err.value.field == field and words in err.value.message
+    assert main(["solve", str(path), "--plot", "none"]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and field in lines[0] and "Traceback" not in lines[0]
+
+
+def test_contact_section_needs_a_model(write_problem):
+    def no_model(text):
+        head = text.split("# --------------------------------------------------------------------------- dynamic model")[0]
+        return head + "\n[design.contact]\nkeep_closed = [\"c21\"]\n"
+
+    with pytest.raises(ProblemError, match="needs a \\[model\\]"):
+        load_problem(write_problem(no_model))
