@@ -110,3 +110,42 @@ def test_contact_section_needs_a_model(write_problem):
 
     with pytest.raises(ProblemError, match="needs a \\[model\\]"):
         load_problem(write_problem(no_model))
+
+
+@pytest.mark.slow  # a catalogue solve and a simulation through the command line
+def test_solve_verifies_itself_and_fails_naming_the_criterion(write_problem, capsys):
+    import json
+
+    # no contact limit in the NLP, but a lag limit for the verification: the min-peak-torque stroke at 500 spm
+    # lags the shell by ~1.7 mm in the full simulation
+    path = write_problem(lambda text: text + "\n[design.contact]\nlag_max_mm = 0.05\n")
+    code = main(["solve", str(path), "--json", "--plot", "none"])
+    out = capsys.readouterr()
+    data = json.loads(out.out)
+    assert code == 1 and data["status"] == "verification failed"
+    block = data["verification"]
+    assert block["failed"] == ["lag"] and block["scene"] == "release"
+    rows = {r["criterion"]: r for r in block["criteria"]}
+    assert rows["lag"]["value"] > 1.0 and rows["lag"]["limit"] == 0.05 and rows["lag"]["ok"] is False
+    assert rows["premature release"]["ok"] is True and rows["handover accuracy"]["ok"] is True
+    assert rows["impact velocity"]["limit"] is None and rows["impact velocity"]["ok"] is None  # reported, not judged
+    assert out.err.strip().splitlines()[-1].startswith("strokeopt: verification failed: lag")
+
+
+@pytest.mark.slow
+def test_verify_prints_the_block_and_a_verdict(write_problem, capsys, tmp_path):
+    problem, path = contact_problem(write_problem, 'keep_closed = ["c21"]\nmin_contact_force_N = 0.5')
+    design = solve_design(problem, spm=380)
+    written = design.write(tmp_path / "d")[0]
+    code = main(["verify", str(path), "--design", str(written), "--plot", "none"])
+    text = capsys.readouterr().out
+    assert code == 0 and "verification: the stroke re-simulated in scene 'release'" in text
+    assert "verified in scene 'release' at 380 spm: premature release, lag, handover accuracy within limits" in text
+    # a design without contact limits at 500 spm lags ~1.7 mm: verify holds it to lag_max_mm, says so, exit 1
+    lagging, lag_path = contact_problem(write_problem, "lag_max_mm = 0.05", name="lag.toml")
+    written = solve_design(lagging, spm=500).write(tmp_path / "lag")[0]
+    code = main(["verify", str(lag_path), "--design", str(written), "--plot", "none"])
+    captured = capsys.readouterr()
+    assert code == 1 and "lag" in captured.out and "FAIL" in captured.out
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("strokeopt: verification failed: lag") and "> limit 0.05 mm" in err[0]

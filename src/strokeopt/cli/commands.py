@@ -287,15 +287,28 @@ def cmd_verify(args) -> int:
     design = DesignStroke(problem, args.design_stroke, problem.spm, str(args.design), args.design_data.get("objective"))
     scene = _scene_name(args, problem)
     result = verify(design, scene, _sim_options(args))
-    premature = result.summary().get("premature_release")
-    status = "verification failed" if premature else "ok"
-    _report_scene(args, problem, scene, result, {"design": str(args.design), "objective": design.objective},
-                  kind="verify", status=status)
-    if premature:
-        print("strokeopt: verification failed: gap N closes before the impact (premature needle release)",
-              file=sys.stderr)
+    block = _verification(problem, result, args.design_data)
+    _report_scene(args, problem, scene, result, {"design": str(args.design), "objective": design.objective,
+                                                 "verification": block}, kind="verify", status=block["status"])
+    if not args.json:
+        from ..report.contact import verification_text
+
+        print(verification_text(block))
+    if block["status"] != "ok":
+        print(f"strokeopt: {block['verdict']}", file=sys.stderr)
         return 1
     return 0
+
+
+def _verification(problem, result, design_data: dict) -> dict:
+    """The verification block of ``verify``: the limits of the problem's [design.contact], the design's handover check."""
+    from ..contact.verify import verification
+
+    contact = problem.design.contact if problem.design is not None else None
+    handover = next((c for c in design_data.get("checks", []) if str(c.get("name", "")).startswith("handover accuracy")),
+                    None)
+    return verification(result, None if contact is None else contact.lag_max,
+                        None if contact is None else contact.impact_velocity_max, handover)
 
 
 def _servo_handover_check(problem):
@@ -381,6 +394,7 @@ def cmd_solve(args) -> int:
     design = solve_design(problem, objective=args.objective, verbose=args.verbose,
                           progress=progress and (lambda it: progress(it, "motors")),
                           handover_check=_servo_handover_check(problem))
+    _verify_solved(design)
     comparison = compare_with_laws(design)
     chosen = drive_used(args, problem, design.motor, design.pulley_teeth)
     if problem.design is not None and (problem.design.motor_choice != "fixed" or problem.design.pulley != "fixed"):
@@ -390,6 +404,10 @@ def cmd_solve(args) -> int:
         _emit(to_json({**design_summary(design), "drive": chosen, "comparison": comparison}))
     else:
         print(design_text(design, comparison))
+        if design.verification is not None:
+            from ..report.contact import verification_text
+
+            print(verification_text(design.verification))
         print(drive_text(chosen))
     if args.out is not None:
         for path in design.write(args.out):
@@ -402,4 +420,17 @@ def cmd_solve(args) -> int:
     if design.status == "limits exceeded":
         print(f"strokeopt: {design.notes[0]}", file=sys.stderr)
         return 1
+    if design.status == "verification failed":
+        print(f"strokeopt: {design.verification['verdict']}", file=sys.stderr)
+        return 1
     return 0
+
+
+def _verify_solved(design) -> None:
+    """A problem with scenes: re-simulate the solved stroke and judge it (contact/verify.py); a failure sets the
+    design's status to ``verification failed`` (exit 1), a design already over a limit keeps its status."""
+    from ..contact.verify import design_verification
+
+    design.verification = design_verification(design)
+    if design.verification is not None and design.verification["status"] != "ok" and design.status != "limits exceeded":
+        design.status = "verification failed"

@@ -14,15 +14,11 @@ import numpy as np
 
 from .settings import ContactSettings
 from ..contact.cluster import Cluster, build_cluster
+from ..contact.scene import default_scene
 from ..contact.simulate import drive_reference
 from ..errors import ProblemError
 
 FIELD = "design.contact"
-
-
-def default_scene(scenes: dict) -> str:
-    """The scene a design's contact limits and its verification use: ``release`` if present, else the first."""
-    return "release" if "release" in scenes else next(iter(scenes))
 
 
 def _where(cl: Cluster) -> str:

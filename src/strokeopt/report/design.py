@@ -194,4 +194,6 @@ def design_summary(design: Design) -> dict:
     for key in ("problem", "problem_file", "cycle_time_s", "pulley_pitch_diameter_mm", "mesh", "checks",
                 "iterations", "notes"):
         out[key] = full[key]
+    if design.verification is not None:
+        out["verification"] = design.verification
     return out
