@@ -149,3 +149,93 @@ def test_verify_prints_the_block_and_a_verdict(write_problem, capsys, tmp_path):
     assert code == 1 and "lag" in captured.out and "FAIL" in captured.out
     err = captured.err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("strokeopt: verification failed: lag") and "> limit 0.05 mm" in err[0]
+
+
+# --------------------------------------------------------------------------- free model parameters
+
+
+def free_problem(write_problem, contact: str, overrides=(), name="free.toml"):
+    """The reference with the drive's k2 load force taken from [model.springs.k2] and k2 free in 900-3000 N/m."""
+    def edit(text):
+        text = text.replace("preload_N = 15.39\nstiffness_N_m = 900\n", 'model_spring = "k2"\n')
+        return text + "\n[design.contact]\n" + contact + '\n\n[design.free]\n"model.springs.k2.stiffness_N_m" = [900, 3000]\n'
+
+    path = write_problem(edit, name)
+    return load_problem(path, [*THESIS_DRIVE, *overrides]), path
+
+
+def driven_motion(problem, stroke, n=40001):
+    from strokeopt.contact.simulate import drive_reference
+
+    k = stroke.evaluate(np.linspace(0, stroke.period, n))
+    sign, s_ref = drive_reference(problem)
+    return sign * (np.ravel(k.s) - s_ref), sign * np.ravel(k.v), sign * np.ravel(k.a)
+
+
+def test_the_drive_spring_comes_from_the_model(write_problem, reference):
+    problem, _ = free_problem(write_problem, 'keep_closed = ["c21"]')
+    stated = next(f for f in reference.drive.load.forces if f.kind == "spring")
+    derived = next(f for f in problem.drive.load.forces if f.kind == "spring")
+    assert derived.spring == "k2" and stated.spring is None
+    assert derived.force == pytest.approx(stated.force, rel=1e-12)  # 900 N/m x 17.1 mm = 15.39 N
+    assert derived.stiffness == stated.stiffness and derived.contact_position == stated.contact_position
+    moved = load_problem(_, [*THESIS_DRIVE, "model.springs.k2.stiffness_N_m=1800"])
+    spring = next(f for f in moved.drive.load.forces if f.kind == "spring")
+    assert spring.force == pytest.approx(2 * stated.force) and spring.stiffness == 1800  # one source: both move
+
+
+@pytest.mark.slow  # a solve and three simulations
+def test_600_spm_softest_k2_with_an_optimal_stroke(write_problem):
+    from strokeopt.contact.cluster import build_cluster, softest_stiffness
+
+    problem, _ = free_problem(write_problem, 'keep_closed = ["c21"]\nmin_contact_force_N = 0.0',
+                              ['design.objective="min_stiffness"'])
+    design = solve_design(problem, spm=600)
+    k2 = design.free_parameters[0]["value"]
+    assert 900 < k2 < 3000 and design.objective_value == pytest.approx(k2)
+    assert design.problem.model.springs["k2"].stiffness == pytest.approx(k2)  # the design's problem has it
+    sim = simulate_scene(design.problem, "release", 600, stroke=design.stroke)
+    assert sim.metrics["max_lag_mm"] < 0.05 and not sim.metrics["premature_release"]
+    # the modified sine's softest lag-free k2 at 600 spm, from the same cluster (thesis ch. 7 derived one)
+    law = problem.stroke(600)
+    cl = build_cluster(problem.scenes["release"])
+    k_law = softest_stiffness(cl, "c21", "k2", *driven_motion(problem, law))
+    assert k2 <= 0.8 * k_law  # at least 20 % softer
+    at = lambda k: load_problem(_, [*THESIS_DRIVE, f"model.springs.k2.stiffness_N_m={k!r}"])  # noqa: E731
+    assert simulate_scene(at(k_law * 1.01), "release", 600, stroke=law).metrics["max_lag_mm"] < 0.05
+    assert simulate_scene(at(k2), "release", 600, stroke=law).metrics["max_lag_mm"] > 0.05  # the law lags with ours
+
+
+@pytest.mark.slow
+def test_600_spm_k2_free_with_an_impact_velocity_of_2_m_s(write_problem):
+    problem, _ = free_problem(write_problem, 'keep_closed = ["c21"]\nmin_contact_force_N = 0.0\n'
+                                             'impact_velocity_max_m_s = 2.0')
+    design = solve_design(problem, spm=600)
+    sim = simulate_scene(design.problem, "release", 600, stroke=design.stroke)
+    assert sim.metrics["impact_velocity_m_s"] <= 2.04  # the modified sine: 2.85 m/s (sources A.6: 2.90)
+    assert sim.metrics["max_lag_mm"] < 0.05 and not sim.metrics["premature_release"]
+    assert design.check_value("peak_torque") <= 3.6
+
+
+@pytest.mark.parametrize("free, field, words", [
+    ('"model.springs.k9.stiffness_N_m" = [900, 3000]', 'design.free."model.springs.k9.stiffness_N_m"',
+     "unknown parameter"),
+    ('"model.springs.k2.damping_N_s_m" = [1, 30]', 'design.free."model.springs.k2.damping_N_s_m"', "unknown parameter"),
+    ('"model.springs.k2.stiffness_N_m" = 900', 'design.free."model.springs.k2.stiffness_N_m"', "needs bounds"),
+    ('"model.springs.k2.stiffness_N_m" = [3000, 900]', 'design.free."model.springs.k2.stiffness_N_m"', "lower < upper"),
+])
+def test_bad_free_parameter_names_the_field(write_problem, capsys, free, field, words):
+    path = write_problem(lambda t: t.replace("preload_N = 15.39\nstiffness_N_m = 900\n", 'model_spring = "k2"\n')
+                         + "\n[design.free]\n" + free + "\n")
+    with pytest.raises(ProblemError) as err:
+        load_problem(path)
+    assert err.value.field == field and words in err.value.message
+    assert main(["solve", str(path), "--plot", "none"]) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_a_free_spring_stated_twice_is_refused(write_problem):
+    path = write_problem(lambda t: t + '\n[design.free]\n"model.springs.k2.stiffness_N_m" = [900, 3000]\n')
+    with pytest.raises(ProblemError, match='model_spring = "k2"') as err:
+        load_problem(path)
+    assert err.value.field == "drive.load_forces"

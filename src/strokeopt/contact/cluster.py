@@ -190,3 +190,18 @@ def build_cluster(scene: Scene) -> Cluster:
             joins[child] = (el.name, parent)
             grew = True
     return Cluster(scene, joins, offsets)
+
+
+def softest_stiffness(cluster: Cluster, element: str, spring: str, xd, vd, ad, min_force: float = 0.0) -> float:
+    """The smallest stiffness of ``spring`` (N/m, its installed length kept) with which the joining contact
+    ``element`` keeps at least ``min_force`` over the motion ``xd, vd, ad`` (numpy arrays, model coordinates)
+    wherever the cluster holds: the force is affine in a linear spring's stiffness. 0 if any stiffness will do;
+    inf if none will (the spring does not press the contact)."""
+    f0 = np.asarray(cluster.contact_force(element, xd, vd, ad, {spring: 0.0}), float)
+    slope = np.asarray(cluster.contact_force(element, xd, vd, ad, {spring: 1.0}), float) - f0
+    held = np.asarray(cluster.holds(element, xd), bool) & (f0 < min_force)
+    if not held.any():
+        return 0.0
+    if np.any(slope[held] <= 0):
+        return float("inf")
+    return float(np.max((min_force - f0[held]) / slope[held]))

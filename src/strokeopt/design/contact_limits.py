@@ -23,11 +23,6 @@ from .limits import Limit, LimitGroup
 from .pins import crossings, pin_motion
 
 
-def free_stiffness(g) -> dict:
-    """Element name -> stiffness symbol of the free model parameters of ``g`` (none: the model's numbers)."""
-    return getattr(g, "free_stiffness", None) or {}
-
-
 def _move_motion(mv, sol, per_interval: int):
     """Stroke position, velocity, acceleration [SI] of one solved move on its fine grid."""
     tau = fine_grid(sol.mesh, per_interval)
@@ -44,7 +39,7 @@ class KeepClosed(Limit):
         if cd is None or not cd.settings.keep_closed:
             return
         cl, fmin = cd.cluster, cd.settings.min_contact_force
-        stiffness = free_stiffness(g)
+        stiffness = g.free_stiffness  # free model parameters (design/free.py); none: the model's numbers
         greville = np.linspace(0.0, 1.0, req.mesh.degree + 1)
         for name in cd.settings.keep_closed:
             rest = cd.rest_force(name)  # the scale of the rows and the reference of the message
@@ -71,7 +66,7 @@ class KeepClosed(Limit):
         cd = req.contact
         if cd is None or not cd.settings.keep_closed:
             return []
-        stiffness = getattr(outcome, "free_values", None) or {}
+        stiffness = outcome.free_values
         rows = []
         for name in cd.settings.keep_closed:
             low = np.inf

@@ -20,6 +20,7 @@ import numpy as np
 
 from .collocation import MoveSolution, MoveVariables
 from .contact_limits import CONTACT_LIMITS
+from .free import build_free
 from .limits import MOVE_LIMITS, LimitGroup, build_drive
 from .objectives import TIME_SCALE, TIME_SCALE_BOUNDS, build_objective, free_time
 from .pins import initial_pin_times, pin_intervals, pin_windows, pins_fit
@@ -173,6 +174,8 @@ class Graph:
     move_sq: Any = None
     pin_values: Any = None  # the pinned points' torques and forces, relative to their limits
     pin_motions: dict = field(default_factory=dict)  # (move, position) -> (weight, v, a) at the pin (pins.pin_motion)
+    load: Any = None  # the drive's load, with the free model parameters in it (free.build_free)
+    free_stiffness: dict = field(default_factory=dict)  # element name -> stiffness symbol (free.build_free)
     handover_terms: list = field(default_factory=list)  # (name, error expression [m])
     handover_total: Any = 0.0
     # the objective (see objectives)
@@ -234,6 +237,7 @@ def build_graph(req: SolveRequest, pins: tuple) -> Graph:
     """Build the symbolic NLP of ``req``'s structure."""
     g = Graph(req, Built(relaxed=req.relaxed), pins)
     add_moves(g)
+    build_free(g)
     if req.drive is not None:
         build_drive(g)
     for lim in CONTACT_LIMITS:

@@ -137,7 +137,7 @@ def pin_rows(g, k: int, mv: Move, rotor, trans):
         weight, v, a = pin_motion(g, k, pos, first)
         eps = 1e-9 * max(abs(mv.stroke), 1e-3)
         for side in (-eps, eps):
-            terms = load_torque(rotor, trans, g.request.drive.load, ca.MX(pos + side), v, a)
+            terms = load_torque(rotor, trans, g.load, ca.MX(pos + side), v, a)
             taus.append(weight * terms.total)
             forces.append(weight * terms.load_force)
     return (ca.horzcat(*taus) if taus else ca.MX(1, 0)), (ca.horzcat(*forces) if forces else ca.MX(1, 0))

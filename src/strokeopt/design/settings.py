@@ -69,6 +69,9 @@ class DesignSettings:
     include_pulley_inertia: bool = True
     solver_options: dict = field(default_factory=dict)
     contact: ContactSettings | None = None
+    #: ``[design.free]``: (parameter key, lower, upper bound [SI]) of the model parameters that are design
+    #: variables (design/free.py checks the keys)
+    free: tuple = ()
 
     @property
     def mesh(self) -> Mesh:
@@ -119,9 +122,29 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
         if problem is not None:
             raise solver.error(*problem)
     contact = parse_contact(f.table("contact", required=False))
+    free = parse_free(f.table("free", required=False))
     f.finish()
     return DesignSettings(objective, n, d, rest, jerk, from_law, accuracy, motor_choice, pulley, zmin, zmax,
-                          check_points, check_tol, refinements, pulley_inertia, options, contact)
+                          check_points, check_tol, refinements, pulley_inertia, options, contact, free)
+
+
+def parse_free(f) -> tuple:
+    """Read ``[design.free]``: ``"model.springs.k2.stiffness_N_m" = [lower, upper]`` (keys checked by design/free.py)."""
+    if f is None:
+        return ()
+    out = []
+    for key in list(f.data):
+        bounds = f.raw(key)
+        if (not isinstance(bounds, list) or len(bounds) != 2
+                or not all(isinstance(b, (int, float)) and not isinstance(b, bool) for b in bounds)):
+            raise f.error(f'"{key}"', f"needs bounds [lower, upper] (numbers), got {bounds!r}")
+        lo, hi = float(bounds[0]), float(bounds[1])
+        # a stiffness of 1 N/m (a hair spring) to 1e9 N/m (a penalty contact), the lower below the upper
+        if not (1.0 <= lo < hi <= 1e9):
+            raise f.error(f'"{key}"', f"bounds {bounds!r} must satisfy 1 <= lower < upper <= 1e9 (N/m)")
+        out.append((key, lo, hi))
+    f.finish()
+    return tuple(out)
 
 
 def parse_contact(f) -> ContactSettings | None:

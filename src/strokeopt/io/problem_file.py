@@ -15,6 +15,7 @@ from pathlib import Path
 from ..contact.model import parse_model
 from ..contact.scene import parse_scenes
 from ..design.contact_setup import check_contact
+from ..design.free import check_free
 from ..design.settings import parse_design
 from ..drive.spec import parse_drive
 from ..drive.transmission import PROFILE_PITCH, TEETH_RANGE, BeltPulley
@@ -78,10 +79,11 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
     model = parse_model(top.table("model", required=False))
     scenes = parse_scenes(top.table("scenes", required=False), model)
     drive_table = top.table("drive", required=False)
-    drive = parse_drive(drive_table, (path or Path(file)).parent) if drive_table is not None else None
+    drive = parse_drive(drive_table, (path or Path(file)).parent, model) if drive_table is not None else None
     design_table = top.table("design", required=False)
     design = parse_design(design_table) if design_table is not None else None
     check_contact(design.contact if design is not None else None, model, scenes, file)
+    check_free(design.free if design is not None else (), model, drive, file)
     servo_table = top.table("servo", required=False)
     servo = parse_servo(servo_table, timing, spm) if servo_table is not None else None
     top.finish()

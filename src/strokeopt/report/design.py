@@ -196,4 +196,6 @@ def design_summary(design: Design) -> dict:
         out[key] = full[key]
     if design.verification is not None:
         out["verification"] = design.verification
+    if design.free_parameters:
+        out["free_parameters"] = design.free_parameters
     return out
