@@ -239,3 +239,47 @@ def test_a_free_spring_stated_twice_is_refused(write_problem):
     with pytest.raises(ProblemError, match='model_spring = "k2"') as err:
         load_problem(path)
     assert err.value.field == "drive.load_forces"
+
+
+# --------------------------------------------------------------------------- what quietness costs
+
+
+@pytest.mark.slow  # three solves, each verified by a simulation
+def test_impact_study_json_and_figure(write_problem, capsys, tmp_path, monkeypatch):
+    import json
+
+    _, path = free_problem(write_problem, 'keep_closed = ["c21"]\nmin_contact_force_N = 0.0')
+    argv = ["solve", str(path), "--spm", "600", "--study", "impact", "--impact-range", "1.6:2.9:3",
+            "--set", THESIS_DRIVE[0], "--set", THESIS_DRIVE[1]]
+    assert main([*argv, "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["status"] == "ok" and data["study"] == "impact"
+    rows = data["rows"]
+    assert [r["impact_velocity_max_m_s"] for r in rows] == pytest.approx([1.6, 2.25, 2.9])
+    assert all(r["feasible"] and r["verified"] for r in rows)
+    for r in rows:  # the full simulation meets each limit (within the verification's 2 %)
+        assert r["simulated_impact_velocity_m_s"] <= 1.02 * r["impact_velocity_max_m_s"]
+    torques = [r["peak_torque_N_m"] for r in rows]
+    assert torques[0] > torques[1] > torques[2]  # quieter costs torque
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 0
+    capsys.readouterr()
+    assert [f.name for f in (tmp_path / "strokeopt-out").iterdir()] == ["free_solve_impact_600spm_min_peak_torque.png"]
+
+
+@pytest.mark.parametrize("extra, words", [
+    ([], "--impact-range: --study impact needs the limits"),
+    (["--impact-range", "2.9:1.6"], "needs 0.01 <= MIN < MAX <= 100"),
+    (["--impact-range", "1:2:50"], "POINTS <= 20"),
+    (["--impact-range", "a:b"], "expected MIN:MAX[:POINTS]"),
+])
+def test_impact_study_bad_range(write_problem, capsys, extra, words):
+    _, path = contact_problem(write_problem, 'keep_closed = ["c21"]')
+    assert main(["solve", str(path), "--study", "impact", *extra, "--plot", "none"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and words in err[0]
+
+
+def test_impact_study_needs_a_contact_section(reference_path, capsys):
+    assert main(["solve", str(reference_path), "--study", "impact", "--impact-range", "1.6:2.9:3", "--plot", "none"]) == 2
+    assert "design.contact" in capsys.readouterr().err

@@ -366,6 +366,10 @@ def cmd_solve(args) -> int:
         _write_figure(lambda p: plot_mesh_study(rows, p),
                       _plot_path(args, "solve_mesh", spm_tag(problem.spm), _objective(args, problem)), args)
         return 0
+    if args.study == "impact":
+        return _impact_study(args, problem, progress)
+    if args.impact_range is not None:
+        raise ProblemError("--impact-range", "", "is for --study impact")
     if sweep is not None:
         rows = sweep_design(problem, sweep, objective=args.objective,
                          progress=progress and (lambda it: progress(it, "spm")))
@@ -434,3 +438,47 @@ def _verify_solved(design) -> None:
     design.verification = design_verification(design)
     if design.verification is not None and design.verification["status"] != "ok" and design.status != "limits exceeded":
         design.status = "verification failed"
+
+
+def _impact_range(text: str | None) -> list[float]:
+    """``--impact-range MIN:MAX[:POINTS]`` -> the impact-velocity limits [m/s]."""
+    from ..design.studies import IMPACT_POINTS_MAX
+
+    if text is None:
+        raise ProblemError("--impact-range", "", "--study impact needs the limits: --impact-range MIN:MAX[:POINTS] "
+                                                 "in m/s, e.g. 1.6:2.9:8")
+    parts = text.split(":")
+    try:
+        lo, hi = float(parts[0]), float(parts[1])
+        n = int(parts[2]) if len(parts) == 3 else 8
+    except (ValueError, IndexError):
+        raise ProblemError("--impact-range", "", f"expected MIN:MAX[:POINTS], got {text!r}") from None
+    # the limits a stop is met at: 0.01-100 m/s, as design.contact.impact_velocity_max_m_s
+    if len(parts) > 3 or not (0.01 <= lo < hi <= 100.0) or not 2 <= n <= IMPACT_POINTS_MAX:
+        raise ProblemError("--impact-range", "", f"needs 0.01 <= MIN < MAX <= 100 (m/s) and 2 <= POINTS <= "
+                                                 f"{IMPACT_POINTS_MAX}, got {text!r}")
+    return [lo + (hi - lo) * k / (n - 1) for k in range(n)]
+
+
+def _impact_study(args, problem, progress) -> int:
+    from ..design.studies import impact_study
+    from ..report.design import impact_study_text, plot_impact_study
+    from ..report.format import to_json
+
+    velocities = _impact_range(args.impact_range)
+    rows = impact_study(problem, velocities, objective=args.objective,
+                        progress=progress and (lambda it: progress(it, "limit")))
+    good = [r for r in rows if r["feasible"] and r.get("verified") is not False]
+    objective = _objective(args, problem)
+    report = {"status": "ok" if good else "infeasible", "problem": problem.name, "spm": problem.spm,
+              "study": "impact", "objective": objective, "drive": drive_used(args, problem), "rows": rows}
+    if args.json:
+        _emit(to_json(report))
+    else:
+        print(impact_study_text(report))
+    _write_figure(lambda p: plot_impact_study(rows, p, objective),
+                  _plot_path(args, "solve_impact", spm_tag(problem.spm), objective), args)
+    if not good:
+        print("strokeopt: infeasible: no impact-velocity limit of the study gives a verified design", file=sys.stderr)
+        return 1
+    return 0

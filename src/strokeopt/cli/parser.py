@@ -148,8 +148,13 @@ def build_parser() -> argparse.ArgumentParser:
     _verbose_option(p, "IPOPT's (and Bonmin's) output of the solve")
     p.add_argument("--out", metavar="DIR", help="write design.json and cam_table.csv (0.1 deg) into DIR, and the "
                                                 "figure too unless --plot or --json says otherwise")
-    p.add_argument("--study", choices=("mesh",), help="'mesh': objective error, violation between nodes and time "
-                                                      "over mesh sizes and collocation degrees")
+    p.add_argument("--study", choices=("mesh", "impact"),
+                   help="'mesh': objective error, violation between nodes and time over mesh sizes and collocation "
+                        "degrees; 'impact': what quietness costs, the design under each impact-velocity limit of "
+                        "--impact-range (needs [design.contact]), each point verified by re-simulation")
+    p.add_argument("--impact-range", metavar="MIN:MAX[:POINTS]",
+                   help="with --study impact: impact-velocity limits in m/s, POINTS (default 8, at most 20) evenly "
+                        "from MIN to MAX, e.g. 1.6:2.9:8")
     _plot_option(p, "solve_<spm>spm_<objective>")
     p.set_defaults(run=cmd_solve)
 
