@@ -121,17 +121,19 @@ class Cluster:
                 out.append(el)
         return out
 
-    def contact_force(self, element: str, xd, vd, ad, stiffness: dict | None = None):
+    def contact_force(self, element: str, xd, vd, ad, stiffness: dict | None = None, stops: bool = True):
         """Compression force [N] of the joining contact ``element`` while the cluster holds, the driven body at
         ``xd, vd, ad`` (SI, model coordinates). ``stiffness``: element name -> stiffness replacing the model's
-        (a free parameter; the preload length stays, so the preload force scales with it)."""
+        (a free parameter; the preload length stays, so the preload force scales with it). ``stops=False``
+        leaves out the contacts to the outside (open wherever the cluster holds): a smooth function."""
         stiffness = stiffness or {}
         child = self.joining[element]
         tree = self.subtree(child)
         masses = self.scene.model.bodies
         total = 0.0 * ad
+        outside = set() if stops else {el.name for el in self._outside(tree)}
         for el in self.scene.element_objects:
-            if el.name == element:
+            if el.name == element or el.name in outside:
                 continue
             a_, b_ = el.bodies
             sign = (-1.0 if a_ in tree else 0.0) + (1.0 if b_ in tree else 0.0)
@@ -151,6 +153,17 @@ class Cluster:
             c = self._position(a_, xd) - self._position(b_, xd) + el.offset
             cond = (c < 0) if cond is None else (ca.logic_and(cond, c < 0) if _symbolic(c) else cond & (c < 0))
         return (0 * xd == 0) if cond is None else cond
+
+    def overrun(self, element: str, xd):
+        """How far [m] the contacts from ``element``'s subtree to the outside are closed at ``xd`` (the sum of
+        their compressions where positive): 0 wherever the cluster holds, growing past a stop (CasADi or numpy)."""
+        tree = self.subtree(self.joining[element])
+        total = 0.0 * xd
+        for el in self._outside(tree):
+            a_, b_ = el.bodies
+            c = self._position(a_, xd) - self._position(b_, xd) + el.offset
+            total = total + (ca.fmax(c, 0) if _symbolic(c) else np.maximum(c, 0))
+        return total
 
     def closing_positions(self, element: str) -> list[tuple[str, float, float]]:
         """(contact, driven position x_d [m], direction +1/-1 of x_d that closes it) of every contact from

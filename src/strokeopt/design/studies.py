@@ -123,8 +123,14 @@ def impact_study(problem, velocities, *, objective: str | None = None, spm: floa
         limited = replace(settings, contact=replace(settings.contact, impact_velocity_max=vmax))
         row = {"impact_velocity_max_m_s": vmax}
         try:
-            d = solve_design(problem, objective=objective, spm=spm, settings=limited, warm_start=warm,
-                             error_terms=error_terms)
+            try:
+                d = solve_design(problem, objective=objective, spm=spm, settings=limited, warm_start=warm,
+                                 error_terms=error_terms)
+            except SolverError:
+                if warm is None:
+                    raise
+                # the previous limit's stroke may start IPOPT where it cannot restore feasibility: start afresh
+                d = solve_design(problem, objective=objective, spm=spm, settings=limited, error_terms=error_terms)
         except SolverError as exc:
             rows.append({**row, "feasible": False, "reason": exc.reason.splitlines()[0],
                          "solve_time_s": time.perf_counter() - t0})
