@@ -158,7 +158,7 @@ def free_problem(write_problem, contact: str, overrides=(), name="free.toml"):
     """The reference with the drive's k2 load force taken from [model.springs.k2] and k2 free in 900-3000 N/m."""
     def edit(text):
         text = text.replace("preload_N = 15.39\nstiffness_N_m = 900\n", 'model_spring = "k2"\n')
-        return text + "\n[design.contact]\n" + contact + '\n\n[design.free]\n"model.springs.k2.stiffness_N_m" = [900, 3000]\n'
+        return text + "\n[design.contact]\n" + contact + "\n\n[design.free.k2]\nstiffness_N_m = [900, 3000]\n"
 
     path = write_problem(edit, name)
     return load_problem(path, [*THESIS_DRIVE, *overrides]), path
@@ -218,15 +218,17 @@ def test_600_spm_k2_free_with_an_impact_velocity_of_2_m_s(write_problem):
 
 
 @pytest.mark.parametrize("free, field, words", [
-    ('"model.springs.k9.stiffness_N_m" = [900, 3000]', 'design.free."model.springs.k9.stiffness_N_m"',
-     "unknown parameter"),
-    ('"model.springs.k2.damping_N_s_m" = [1, 30]', 'design.free."model.springs.k2.damping_N_s_m"', "unknown parameter"),
-    ('"model.springs.k2.stiffness_N_m" = 900', 'design.free."model.springs.k2.stiffness_N_m"', "needs bounds"),
-    ('"model.springs.k2.stiffness_N_m" = [3000, 900]', 'design.free."model.springs.k2.stiffness_N_m"', "lower < upper"),
+    ("[design.free.k9]\nstiffness_N_m = [900, 3000]", "design.free.k9", "unknown parameter"),
+    ("[design.free.pad]\nstiffness_N_m = [900, 3000]", "design.free.pad", "has no stiffness_N_m to free"),
+    ("[design.free.k2]\ndamping_N_s_m = [1, 30]", "design.free.k2.stiffness_N_m", "required but missing"),
+    ("[design.free.k2]\nstiffness_N_m = [900, 3000]\ndamping_N_s_m = [1, 30]", "design.free.k2.damping_N_s_m",
+     "unknown field"),
+    ("[design.free.k2]\nstiffness_N_m = 900", "design.free.k2.stiffness_N_m", "needs bounds"),
+    ("[design.free.k2]\nstiffness_N_m = [3000, 900]", "design.free.k2.stiffness_N_m", "lower <= upper"),
 ])
 def test_bad_free_parameter_names_the_field(write_problem, capsys, free, field, words):
     path = write_problem(lambda t: t.replace("preload_N = 15.39\nstiffness_N_m = 900\n", 'model_spring = "k2"\n')
-                         + "\n[design.free]\n" + free + "\n")
+                         + "\n" + free + "\n")
     with pytest.raises(ProblemError) as err:
         load_problem(path)
     assert err.value.field == field and words in err.value.message
@@ -235,7 +237,7 @@ def test_bad_free_parameter_names_the_field(write_problem, capsys, free, field, 
 
 
 def test_a_free_spring_stated_twice_is_refused(write_problem):
-    path = write_problem(lambda t: t + '\n[design.free]\n"model.springs.k2.stiffness_N_m" = [900, 3000]\n')
+    path = write_problem(lambda t: t + "\n[design.free.k2]\nstiffness_N_m = [900, 3000]\n")
     with pytest.raises(ProblemError, match='model_spring = "k2"') as err:
         load_problem(path)
     assert err.value.field == "drive.load_forces"
@@ -283,3 +285,15 @@ def test_impact_study_bad_range(write_problem, capsys, extra, words):
 def test_impact_study_needs_a_contact_section(reference_path, capsys):
     assert main(["solve", str(reference_path), "--study", "impact", "--impact-range", "1.6:2.9:3", "--plot", "none"]) == 2
     assert "design.contact" in capsys.readouterr().err
+
+
+def test_the_shipped_contact_design_file_is_the_reference_plus_its_contact_sections(reference):
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "problems" / "deco2000_contact_design.toml"
+    p = load_problem(path)
+    assert p.spm == 600 and p.design.contact.keep_closed == ("c21",) and p.design.free == (("k2", 900.0, 3000.0),)
+    assert p.design.motor_choice == p.design.pulley == "fixed" and p.pulley_teeth == 28
+    assert p.model == reference.model and p.timing == reference.timing
+    ours, theirs = p.drive.load.forces[0], reference.drive.load.forces[0]
+    assert ours.spring == "k2" and ours.force == pytest.approx(theirs.force) and ours.stiffness == theirs.stiffness

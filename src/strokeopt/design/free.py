@@ -1,9 +1,9 @@
 """Model parameters as design variables: ``[design.free]``.
 
-``"model.springs.k2.stiffness_N_m" = [900, 3000]`` makes the stiffness of the contact model's spring k2 a
-variable of the same NLP as the stroke, between the bounds (N/m): the design then answers "the softest k2
-with which this stroke keeps the follower on the shell" and co-designs stroke and spring. The installed
-length stays, so the spring's preload force scales with its stiffness. The parameter enters
+``[design.free.k2]`` ``stiffness_N_m = [900, 3000]`` makes the stiffness of the contact model's spring k2 a
+variable of the same NLP as the stroke, between the bounds (N/m; equal bounds fix it there): the design then
+answers "the softest k2 with which this stroke keeps the follower on the shell" and co-designs stroke and
+spring. The installed length stays, so the spring's preload force scales with its stiffness. It enters
 
 * the contact limits (design/contact_limits.py: the cluster's contact forces), and
 * the drive's load, through every ``[[drive.load_forces]]`` that takes its numbers from the spring
@@ -20,34 +20,20 @@ import numpy as np
 from ..drive.spec import with_model_springs
 from ..errors import ProblemError
 
-#: The model parameters that may be free: ``model.<springs|contacts>.<name>.<field>``.
-FREE_FIELDS = ("stiffness_N_m",)
 FIELD = "design.free"
 
 
-def _parts(key: str):
-    parts = key.split(".")
-    if len(parts) != 4 or parts[0] != "model" or parts[1] not in ("springs", "contacts") or parts[3] not in FREE_FIELDS:
-        return None
-    return parts[1], parts[2], parts[3]
-
-
 def check_free(free: tuple, model, drive, file: str) -> None:
-    """Every ``[design.free]`` key names an existing linear element's stiffness of ``[model]`` (ProblemError)."""
-    for key, lo, hi in free:
-        fld = f'{FIELD}."{key}"'
-        parts = _parts(key)
-        if parts is None:
-            raise ProblemError(file, fld, "unknown parameter: a free parameter is 'model.springs.NAME.stiffness_N_m' "
-                                          "or 'model.contacts.NAME.stiffness_N_m'")
+    """Every ``[design.free.<element>]`` names a linear spring or contact of ``[model]`` (ProblemError), and no
+    drive load force states that spring's numbers itself (it must take them: ``model_spring``)."""
+    for name, _, _ in free:
+        fld = f"{FIELD}.{name}"
         if model is None:
             raise ProblemError(file, fld, "the problem has no [model] section")
-        table, name, _ = parts
-        pool = model.springs if table == "springs" else model.contacts
-        if name not in pool:
-            raise ProblemError(file, fld, f"unknown parameter: [model.{table}] has no {name!r}; it has: "
-                                          f"{', '.join(pool) or 'none'}")
-        el = pool[name]
+        if name not in model.elements:
+            raise ProblemError(file, fld, f"unknown parameter: the model has no spring or contact {name!r}; it has: "
+                                          f"{', '.join(model.elements)}")
+        el = model.elements[name]
         if el.force_law is not None or el.kind == "grip":
             raise ProblemError(file, fld, f"{name!r} has no stiffness_N_m to free (a force law or a grip)")
         if drive is not None:
@@ -60,8 +46,13 @@ def check_free(free: tuple, model, drive, file: str) -> None:
 
 
 def free_elements(settings) -> dict:
-    """Element name -> (key, lower, upper) of the free parameters of ``settings`` (DesignSettings)."""
-    return {_parts(key)[1]: (key, lo, hi) for key, lo, hi in getattr(settings, "free", ())}
+    """Element name -> (lower, upper) stiffness [N/m] of the free parameters of ``settings`` (DesignSettings)."""
+    return {name: (lo, hi) for name, lo, hi in getattr(settings, "free", ())}
+
+
+def free_key(model, name: str) -> str:
+    """The problem-file path of a free element's stiffness (``model.springs.k2.stiffness_N_m``)."""
+    return f"model.{'springs' if name in model.springs else 'contacts'}.{name}.stiffness_N_m"
 
 
 def build_free(g) -> None:
@@ -73,9 +64,9 @@ def build_free(g) -> None:
         return
     elements = req.problem.model.elements
     stiffness = {}
-    for name, (key, lo, hi) in free.items():
+    for name, (lo, hi) in free.items():
         start = float(np.clip(elements[name].stiffness, lo, hi)) / hi
-        stiffness[name] = g.built.var(f"free {key}", (1, 1), lo / hi, 1.0, start) * hi
+        stiffness[name] = g.built.var(f"free {name} stiffness", (1, 1), lo / hi, 1.0, start) * hi
     g.free_stiffness = stiffness
     if g.load is not None:
         g.load = with_model_springs(g.load, stiffness)
@@ -86,17 +77,17 @@ def free_values(nlp, x) -> dict:
     return {name: float(nlp.value(sym, x).item()) for name, sym in getattr(nlp.graph, "free_stiffness", {}).items()}
 
 
-def free_overrides(settings, values: dict) -> list[str]:
+def free_overrides(model, values: dict) -> list[str]:
     """``--set`` texts that put the values found into the problem file."""
-    free = free_elements(settings)
-    return [f"{free[name][0]}={value!r}" for name, value in values.items()]
+    return [f"{free_key(model, name)}={value!r}" for name, value in values.items()]
 
 
-def free_report(settings, values: dict) -> list[dict]:
-    """One row per free parameter: key, value found, bounds, and whether it sits on a bound."""
+def free_report(settings, model, values: dict) -> list[dict]:
+    """One row per free parameter: its problem-file path, the value found, bounds, and whether it sits on a bound."""
     rows = []
     for name, value in values.items():
-        key, lo, hi = free_elements(settings)[name]
+        lo, hi = free_elements(settings)[name]
+        key = free_key(model, name)
         at = "lower" if value <= lo * (1 + 1e-6) else "upper" if value >= hi * (1 - 1e-6) else None
         rows.append({"parameter": key, "value": value, "lower": lo, "upper": hi, "at_bound": at})
     return rows

@@ -114,11 +114,11 @@ def min_stiffness(g):
     free = g.free_stiffness
     if not free:
         raise ProblemError(str(g.problem.file), "design.objective", "min_stiffness needs a free stiffness in "
-                                                                   "[design.free] (e.g. \"model.springs.k2.stiffness_N_m\" "
+                                                                   "[design.free] (e.g. [design.free.k2] stiffness_N_m "
                                                                    "= [900, 3000])")
     from .free import free_elements
 
-    bounds = {name: hi for name, (_, _, hi) in free_elements(g.request.settings).items()}
+    bounds = {name: hi for name, (_, hi) in free_elements(g.request.settings).items()}
     expr = sum(k / bounds[name] for name, k in free.items())
     if len(free) == 1:
         hi = next(iter(bounds.values()))

@@ -69,8 +69,8 @@ class DesignSettings:
     include_pulley_inertia: bool = True
     solver_options: dict = field(default_factory=dict)
     contact: ContactSettings | None = None
-    #: ``[design.free]``: (parameter key, lower, upper bound [SI]) of the model parameters that are design
-    #: variables (design/free.py checks the keys)
+    #: ``[design.free.<element>]``: (element, lower, upper stiffness [N/m]) of the model parameters that are
+    #: design variables (design/free.py checks the names)
     free: tuple = ()
 
     @property
@@ -129,20 +129,23 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
 
 
 def parse_free(f) -> tuple:
-    """Read ``[design.free]``: ``"model.springs.k2.stiffness_N_m" = [lower, upper]`` (keys checked by design/free.py)."""
+    """Read ``[design.free.<element>]`` tables: ``stiffness_N_m = [lower, upper]`` (element names are checked
+    against the model by design/free.py); returns ``(element, lower, upper)`` per table."""
     if f is None:
         return ()
     out = []
-    for key in list(f.data):
-        bounds = f.raw(key)
+    for name in list(f.data):
+        t = f.table(name)
+        bounds = t.raw("stiffness_N_m")
         if (not isinstance(bounds, list) or len(bounds) != 2
                 or not all(isinstance(b, (int, float)) and not isinstance(b, bool) for b in bounds)):
-            raise f.error(f'"{key}"', f"needs bounds [lower, upper] (numbers), got {bounds!r}")
+            raise t.error("stiffness_N_m", f"needs bounds [lower, upper] in N/m, got {bounds!r}")
         lo, hi = float(bounds[0]), float(bounds[1])
-        # a stiffness of 1 N/m (a hair spring) to 1e9 N/m (a penalty contact), the lower below the upper
-        if not (1.0 <= lo < hi <= 1e9):
-            raise f.error(f'"{key}"', f"bounds {bounds!r} must satisfy 1 <= lower < upper <= 1e9 (N/m)")
-        out.append((key, lo, hi))
+        # a stiffness of 1 N/m (a hair spring) to 1e9 N/m (a penalty contact); equal bounds fix it there
+        if not (1.0 <= lo <= hi <= 1e9):
+            raise t.error("stiffness_N_m", f"bounds {bounds!r} must satisfy 1 <= lower <= upper <= 1e9 (N/m)")
+        t.finish()
+        out.append((name, lo, hi))
     f.finish()
     return tuple(out)
 
