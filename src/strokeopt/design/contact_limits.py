@@ -84,8 +84,9 @@ class KeepClosed(Limit):
                 held = np.asarray(cd.cluster.holds(name, xd), bool)
                 if held.any():
                     low = min(low, float(np.min(force[held])))
-            rows.append({"name": f"contact {name} force (kept closed)", "value": low,
-                         "limit": cd.settings.min_contact_force, "unit": "N", "lower": True})
+            if np.isfinite(low):  # the follower rides on the driven body somewhere in the cycle
+                rows.append({"name": f"contact {name} force (kept closed)", "value": low,
+                             "limit": cd.settings.min_contact_force, "unit": "N", "lower": True})
         return rows
 
 
