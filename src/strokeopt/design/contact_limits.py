@@ -85,7 +85,7 @@ class KeepClosed(Limit):
                 if held.any():
                     low = min(low, float(np.min(force[held])))
             if np.isfinite(low):  # the follower rides on the driven body somewhere in the cycle
-                rows.append({"name": f"contact {name} force (kept closed)", "value": low,
+                rows.append({"name": f"contact {name} force (kept closed, >= limit)", "value": low,
                              "limit": cd.settings.min_contact_force, "unit": "N", "lower": True})
         return rows
 
