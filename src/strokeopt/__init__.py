@@ -51,7 +51,9 @@ from .servo.settings import ServoSettings
 from .servo.tradeoff import tradeoff
 from .contact.simulate import SceneResult, SimulationOptions, simulate_scene
 from .contact.studies import sweep_spm, tolerance_study
-from .contact.verify import verify
+from .contact.verify import design_verification, verification, verify
+from .contact.cluster import Cluster, build_cluster, softest_stiffness
+from .design.studies import impact_study
 from .motion.stroke import Kinematics, Piece, StrokeFunction
 from .motion.timing import Interval, TimingDiagram
 from .drive.transmission import BeltPulley, ScrewLever, SliderCrank, Transmission, gt3_pitch_diameter
@@ -68,5 +70,6 @@ __all__ = [
     "solve_design", "sweep_design",
     "AccuracyResult", "DriveAxis", "ServoErrorTerm", "ServoSettings", "accuracy_report", "axis_from_problem", "handover_accuracy",
     "tradeoff",
+    "Cluster", "build_cluster", "design_verification", "impact_study", "softest_stiffness", "verification",
 ]
 __version__ = "0.1.0"

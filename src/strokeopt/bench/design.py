@@ -144,3 +144,29 @@ def _bench_design_vs_rockit() -> BenchResult:
                        notes=notes + ["target: strokeopt at least 3x faster end to end"])
 
 
+
+
+@benchmark("design_impact_study", "what quietness costs: problems/deco2000_contact_design.toml at 600 spm, 8 "
+                                  "impact-velocity limits 1.6-2.9 m/s, each solved and verified by re-simulation, "
+                                  "against one verified solve", target_s=60.0)
+def _bench_design_impact_study() -> BenchResult:
+    from ..contact.verify import design_verification
+    from ..design.studies import impact_study
+
+    p = load_problem(reference_problem_path().parent / "deco2000_contact_design.toml")
+    limits = [1.6 + 1.3 * k / 7 for k in range(8)]
+    clear_cache()
+    t0 = time.perf_counter()
+    one = solve_design(p)
+    design_verification(one)
+    t_one = time.perf_counter() - t0
+    clear_cache()
+    t0 = time.perf_counter()
+    rows = impact_study(p, limits)
+    t_study = time.perf_counter() - t0
+    verified = sum(1 for r in rows if r.get("verified"))
+    return BenchResult(rows=[BenchRow("one solve + verification (builds the NLP)", t_one),
+                             BenchRow("impact study, 8 limits, each solved and verified", t_study,
+                                      f"{verified} of {len(rows)} verified")],
+                       measured_s=t_study, ratio=t_study / t_one, ratio_label="study / one verified solve",
+                       notes=["each limit is a new NLP structure (the limit is part of the settings)"])

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import argparse
 
-from .commands import (cmd_accuracy, cmd_bench, cmd_kinematics, cmd_laws, cmd_simulate, cmd_size, cmd_solve,
+from .commands import (cmd_accuracy, cmd_bench, cmd_kinematics, cmd_laws, cmd_simulate, cmd_size,
                        cmd_tradeoff, cmd_verify)
 from .common import DEFAULT_OUT
+from .solve_command import cmd_solve
 
 
 def _problem_parent() -> argparse.ArgumentParser:
@@ -88,7 +89,7 @@ def build_parser() -> argparse.ArgumentParser:
                "limit); 2 bad input (one line naming the file, the field and what is wrong). "
                "Every --json report has a 'status': 'ok'; 'optimal' or 'acceptable' (solve: IPOPT's verdict); "
                "'infeasible' (size, a solve sweep: no candidate or rate passes); 'limits exceeded' (solve, accuracy: "
-               "a limit is broken, exit 1); 'verification failed' (verify: premature needle release, exit 1); "
+               "a limit is broken, exit 1); 'verification failed' (solve, verify: the stroke re-simulated in the contact model breaks a criterion, exit 1); "
                "'targets missed' (bench); 'failed' (a solve or an integration that did not succeed, exit 1) and "
                "'bad input' (exit 2), each with the 'message' stderr shows.",
     )
@@ -148,7 +149,10 @@ def build_parser() -> argparse.ArgumentParser:
                                    "Objectives: min_peak_torque, min_rms_torque, min_energy, min_peak_accel, "
                                    "min_accel_squared, min_jerk, min_snap; min_time: the highest stitch rate "
                                    "within every limit (the cycle time free, --spm the start of the search), "
-                                   "with the binding limits named.",
+                                   "with the binding limits named. [design.contact] holds the contact model in the "
+                                   "collocation (keep_closed contacts, min_contact_force_N, impact_velocity_max_m_s); "
+                                   "with [scenes], the optimal stroke is re-simulated and judged (a verification "
+                                   "block; status 'verification failed', exit 1, names the criterion).",
                        epilog="Examples: strokeopt solve problems/deco2000_needle_bar.toml; "
                               "strokeopt solve problems/deco2000_needle_bar.toml --spm 600 --out out/; "
                               "strokeopt solve problems/deco2000_needle_bar.toml --spm 400:900:50; "
@@ -163,8 +167,13 @@ def build_parser() -> argparse.ArgumentParser:
                                                 "and the design report (report.html) into DIR, and the figure too "
                                                 "unless --plot or --json says otherwise")
     _cam_table_options(p)
-    p.add_argument("--study", choices=("mesh",), help="'mesh': objective error, violation between nodes and time "
-                                                      "over mesh sizes and collocation degrees")
+    p.add_argument("--study", choices=("mesh", "impact"),
+                   help="'mesh': objective error, violation between nodes and time over mesh sizes and collocation "
+                        "degrees; 'impact': what quietness costs, the design under each impact-velocity limit of "
+                        "--impact-range (needs [design.contact]), each point verified by re-simulation")
+    p.add_argument("--impact-range", metavar="MIN:MAX[:POINTS]",
+                   help="with --study impact: impact-velocity limits in m/s, POINTS (default 8, at most 20) evenly "
+                        "from MIN to MAX, e.g. 1.6:2.9:8")
     _plot_option(p, "solve_<spm>spm_<objective>")
     p.set_defaults(run=cmd_solve)
 
@@ -204,8 +213,10 @@ def build_parser() -> argparse.ArgumentParser:
                                    "pulley and problem file) and integrate a scene of the problem's contact model with "
                                    "it, reporting the same results as 'simulate'. Two forms: 'verify PROBLEM --design "
                                    "DESIGN.json' (like every other command) and 'verify DESIGN.json' (the problem "
-                                   "recorded in the design, or --problem FILE). Exit code 1 (status 'verification "
-                                   "failed') when the needle is released prematurely.",
+                                   "recorded in the design, or --problem FILE). Prints a verification block (premature "
+                                   "release, lag against [design.contact] lag_max_mm, impact velocity against "
+                                   "impact_velocity_max_m_s, the design's handover accuracy: value, limit, pass/fail) "
+                                   "and a one-line verdict; exit code 1 (status 'verification failed') when one fails.",
                        epilog="Example: strokeopt solve problems/deco2000_needle_bar.toml --out out && "
                               "strokeopt verify problems/deco2000_needle_bar.toml --design out/design.json "
                               "--scene release")

@@ -7,7 +7,8 @@ from pathlib import Path
 
 from ..errors import ProblemError
 from .common import _emit, _load, _probe_dir, drive_used, progress_bar
-from .commands import _sim_options, solve_once
+from .commands import _sim_options
+from .solve_command import solve_once
 
 
 def _html_path(path: str) -> Path:

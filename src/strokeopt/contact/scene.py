@@ -73,6 +73,11 @@ class Scene:
         return SceneODE(self, stroke, float(sign), float(s_ref), float(smoothing))
 
 
+def default_scene(scenes: dict) -> str:
+    """The scene a design is held to and verified in when none is named: ``release`` if present, else the first."""
+    return "release" if "release" in scenes else next(iter(scenes))
+
+
 def make_scene(model: Model, name: str, bodies, elements, description: str = "", where=None) -> Scene:
     """A scene from names, checked against the model. ``where = (file, field)`` for error messages."""
     from ..errors import ProblemError

@@ -176,7 +176,7 @@ class SceneResult:
 # --------------------------------------------------------------------------- the CasADi stepper
 
 
-def _drive_reference(problem) -> tuple[float, float]:
+def drive_reference(problem) -> tuple[float, float]:
     """``(sign, s_ref)`` of ``x_driven = sign * (s - s_ref)``: zero at the start of the handover move,
     positive in its direction (the first move if none is marked)."""
     if problem.model is not None and problem.model.transmission is not None:
@@ -184,6 +184,9 @@ def _drive_reference(problem) -> tuple[float, float]:
     moves = problem.timing.moves
     move = problem.timing.handover_move or moves[0]
     return (1.0 if move.stroke > 0 else -1.0), move.start_position
+
+
+_drive_reference = drive_reference  # the name tests/test_scene.py imports
 
 
 def _integrator(ode, opts: SimulationOptions, grid: np.ndarray, refine: bool = False):
@@ -290,7 +293,7 @@ def integrate_scene(problem, scene: str, spm: float | None, stroke, options: Sim
         raise ProblemError(str(problem.file), "machine.spm", f"the stroke's period {stroke.period:g} s is not the cycle "
                                                              f"time {period:g} s at {spm:g} spm")
     cpu0 = time.process_time()
-    sign, s_ref = _drive_reference(problem)
+    sign, s_ref = drive_reference(problem)
     ode = sc.build(stroke, sign, s_ref, opts.smoothing)
     spans = [p.duration for p in stroke.pieces]
     n_out = int(min(max(math.ceil(max(spans) / period * 360.0 / opts.resolution_deg), 20), 4000))

@@ -91,7 +91,8 @@ def compare_with_laws(design: Design, laws=None) -> list[dict]:
     for law in laws:
         stroke = problem.with_law(law).stroke(design.spm)
         row = {"law": law.label, **_stroke_measures(design, stroke)}
-        violates = _law_violations(problem, design.spm, settings, law) + row.pop("_failed", [])
+        violates = (_law_violations(problem, design.spm, settings, law) + row.pop("_failed", [])
+                    + _contact_violations(problem, settings, stroke))
         if law.characteristics.continuity < 2:  # the acceleration jumps at the dwells: the jerk is an impulse
             row.update(jerk_max_m_s3=math.inf, jerk_squared=math.inf)
         row.update(feasible=not violates, violates=violates)
@@ -103,6 +104,32 @@ def compare_with_laws(design: Design, laws=None) -> list[dict]:
         r["vs_optimal_pct"] = 0.0 if pct is not None and abs(pct) < 1e-6 else pct  # equal up to round-off: 0
     # a law that breaks the problem's constraints does not compete with the optimum: listed last
     return [opt] + [r for r in rows[1:] if r["feasible"]] + [r for r in rows[1:] if not r["feasible"]]
+
+
+def _contact_violations(problem, settings: DesignSettings, stroke: StrokeFunction, samples: int = 20_001) -> list[str]:
+    """The ``[design.contact]`` limits a stroke breaks (design/contact_limits.py), on a fine sample of the cycle."""
+    from .contact_setup import contact_design
+
+    cd = contact_design(problem, settings)
+    if cd is None:
+        return []
+    tol = settings.check_tolerance
+    k = stroke.sample(samples)
+    xd, vd, ad = cd.driven(np.asarray(k.s, float), np.asarray(k.v, float), np.asarray(k.a, float))
+    out = []
+    fmin = cd.settings.min_contact_force
+    for name in cd.settings.keep_closed:
+        force = np.asarray(cd.cluster.contact_force(name, xd, vd, ad), float)
+        held = np.asarray(cd.cluster.holds(name, xd), bool)
+        if held.any() and float(np.min(force[held])) < fmin - tol * max(abs(fmin), 1.0):
+            out.append(f"keep_closed {name}")
+    vmax = cd.settings.impact_velocity_max
+    if vmax is not None and cd.impact is not None:
+        c = cd.impact[2] * (xd - cd.impact[1])  # rises through 0 where the cluster meets the stop
+        hits = np.flatnonzero((c[:-1] < 0) & (c[1:] >= 0))
+        if hits.size and abs(float(vd[hits[0] + 1])) > vmax * (1 + tol):
+            out.append("impact velocity")
+    return out
 
 
 _REST_NAMES = {1: "rest (velocity)", 2: "rest (acceleration)", 3: "rest (jerk)"}

@@ -62,7 +62,10 @@ def diagnose(req: SolveRequest, status: str) -> SolverError:
 
 
 def need_text(lim: LimitGroup, need: float, name: str) -> str:
-    """``<name> needs X <unit>, limit Y <unit> (Z % over)``: a violated limit group and by how much."""
+    """``<name> needs X <unit>, limit Y <unit> (Z % over)``: a violated limit group and by how much (or the
+    group's own words, :attr:`~.limits.LimitGroup.describe`)."""
+    if lim.describe is not None:
+        return lim.describe(need)
     over = f" ({100 * (need / lim.limit - 1):.1f} % over)" if lim.limit else ""
     unit, shown_need, shown_lim = lim.unit, need, lim.limit
     if unit == "m":

@@ -126,7 +126,7 @@ class DriveModel:
         s = ca.vec(g.si(k, greville, "s")).T
         v = ca.vec(g.vars[k].hull("v") * (mv.stroke / g.T[k])).T  # bounds the speed between nodes too
         a = ca.vec(g.vars[k].hull("a") * (mv.stroke / g.T[k] ** 2)).T
-        terms = load_torque(self.rotor, self.trans, g.request.drive.load, s, 0 * s, a)
+        terms = load_torque(self.rotor, self.trans, g.load, s, 0 * s, a)
         tau = terms.total / self.tau_ref
         self.forces.append(terms.load_force)
         # where a load force switches on inside the move the torque jumps: the pinned points (pins.py)
@@ -147,7 +147,7 @@ class DriveModel:
         for itv, dur in zip(req.problem.timing.intervals, sch.duration):
             if itv.is_move:
                 continue
-            terms = load_torque(self.rotor, self.trans, req.drive.load, ca.MX(itv.start_position), ca.MX(0.0),
+            terms = load_torque(self.rotor, self.trans, g.load, ca.MX(itv.start_position), ca.MX(0.0),
                                 ca.MX(0.0))
             t_d = terms.total / self.tau_ref
             g.dwell_torques.append(t_d)

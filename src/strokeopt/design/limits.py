@@ -39,6 +39,9 @@ class LimitGroup:
     #: False, or a function of the solve's request returning False: the rows exist (one NLP
     #: structure for every solve) but their bound is infinite
     enforced: Any = True
+    #: None, or a function of ``need`` giving the whole message of a violation (a limit a plain
+    #: "needs X, limit Y" does not say well, e.g. a lower bound)
+    describe: Any = None
 
     @property
     def short(self) -> str:
@@ -137,7 +140,7 @@ class RmsTorque(Limit):
         dm, b, mesh, mv = g.drive_model, g.built, g.request.mesh, g.request.moves[k]
         x_q, w_q = mesh.quadrature
         sq, vq, aq = (g.si(k, x_q, kind) for kind in ("s", "v", "a"))  # N x len(x_q)
-        tq = load_torque(dm.rotor, dm.trans, g.request.drive.load, sq, vq, aq).total / dm.tau_ref
+        tq = load_torque(dm.rotor, dm.trans, g.load, sq, vq, aq).total / dm.tau_ref
         per_interval = ca.mtimes(tq**2, ca.DM(w_q)) * (mesh.h * g.T[k] / dm.period)
         Q = b.var(f"torque2 move {mv.index}", (mesh.intervals + 1, 1), -np.inf, np.inf, 0.0)
         b.constrain(f"torque2 move {mv.index}", ca.vertcat(Q[0], Q[1:] - Q[:-1] - per_interval), 0.0, 0.0)

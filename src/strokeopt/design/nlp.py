@@ -19,6 +19,8 @@ import casadi as ca
 import numpy as np
 
 from .collocation import MoveSolution, MoveVariables
+from .contact_limits import CONTACT_LIMITS
+from .free import build_free
 from .limits import MOVE_LIMITS, LimitGroup, build_drive
 from .objectives import TIME_SCALE, TIME_SCALE_BOUNDS, build_objective, free_time
 from .pins import initial_pin_times, pin_intervals, pin_windows, pins_fit
@@ -171,6 +173,9 @@ class Graph:
     mean_sq: Any = None
     move_sq: Any = None
     pin_values: Any = None  # the pinned points' torques and forces, relative to their limits
+    pin_motions: dict = field(default_factory=dict)  # (move, position) -> (weight, v, a) at the pin (pins.pin_motion)
+    load: Any = None  # the drive's load, with the free model parameters in it (free.build_free)
+    free_stiffness: dict = field(default_factory=dict)  # element name -> stiffness symbol (free.build_free)
     handover_terms: list = field(default_factory=list)  # (name, error expression [m])
     handover_total: Any = 0.0
     # the objective (see objectives)
@@ -232,8 +237,11 @@ def build_graph(req: SolveRequest, pins: tuple) -> Graph:
     """Build the symbolic NLP of ``req``'s structure."""
     g = Graph(req, Built(relaxed=req.relaxed), pins)
     add_moves(g)
+    build_free(g)
     if req.drive is not None:
         build_drive(g)
+    for lim in CONTACT_LIMITS:
+        lim.on_cycle(g)
     f = build_objective(g)
     if g.built.relaxed:
         f = sum(s for _, s in g.built.limits if s is not None) * 1e3 + 1e-6 * f
@@ -330,14 +338,15 @@ def prepare(req: SolveRequest, cache: NlpCache = NLP_CACHE) -> Nlp:
     """The NLP of one solve: the built structure (from the cache when one fits) and this solve's numbers."""
     mesh = req.mesh
     pin_times = dict(req.pin_times or {})
-    if req.drive is not None and req.pin_times is None and req.warm is None:
+    pinned = req.drive is not None or req.contact is not None
+    if pinned and req.pin_times is None and req.warm is None:
         y0, v0, a_nodes = initial_unit(mesh, req.settings.rest_order)
         pin_times = initial_pin_times(req, [MoveSolution(mesh, y0, v0, a_nodes)] * len(req.moves))
-    if req.drive is not None and req.pin_times is None and req.warm is not None and all(w.mesh == mesh
+    if pinned and req.pin_times is None and req.warm is not None and all(w.mesh == mesh
                                                                                           for w in req.warm):
         pin_times = initial_pin_times(req, req.warm)
     req = replace(req, pin_times=pin_times)
-    crossings = pin_intervals(req) if req.drive is not None else []
+    crossings = pin_intervals(req) if pinned else []
     key = structure_key(req)
     graph = cache.find(key, req.problem, crossings, mesh)
     if graph is None:

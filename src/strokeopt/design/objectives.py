@@ -108,6 +108,27 @@ def min_time(g):
     return g.time_scale + _smoothing(g)
 
 
+def min_stiffness(g):
+    """The softest springs: the free model stiffnesses of ``[design.free]`` (design/free.py), each relative to its
+    upper bound, summed; the stroke is the one of least jerk among those the limits allow with them."""
+    free = g.free_stiffness
+    if not free:
+        raise ProblemError(str(g.problem.file), "design.objective", "min_stiffness needs a free stiffness in "
+                                                                   "[design.free] (e.g. [design.free.k2] stiffness_N_m "
+                                                                   "= [900, 3000])")
+    from .free import free_elements
+
+    bounds = {name: hi for name, (_, hi) in free_elements(g.request.settings).items()}
+    expr = sum(k / bounds[name] for name, k in free.items())
+    if len(free) == 1:
+        hi = next(iter(bounds.values()))
+        g.unit, g.transform = "N/m", (lambda f, r: f * hi)
+    else:
+        g.unit, g.transform = "-", (lambda f, r: f)
+    g.objective_expr = expr
+    return expr + 1e3 * _smoothing(g)
+
+
 @dataclass(frozen=True)
 class Objective:
     """An objective: what it minimises, whether it needs the drive, its builder, and whether the cycle
@@ -132,6 +153,8 @@ REGISTRY = {o.name: o for o in (
     Objective("min_jerk", "integral of jerk squared over the moves", False, _integral_objective("j", 5, "m^2/s^5")),
     Objective("min_snap", "integral of snap (4th derivative) squared over the moves", False,
               _integral_objective("snap", 7, "m^2/s^7")),
+    Objective("min_stiffness", "the free model stiffnesses of [design.free] (the softest springs the limits allow), "
+              "each relative to its upper bound", False, min_stiffness),
     Objective("min_time", "shortest stitch period (highest stitch rate) within every limit of the design, the "
               "interval times fixed fractions of the cycle", True, min_time, free_time=True),
 )}

@@ -25,6 +25,16 @@ def switch_positions(drive) -> list[float]:
     return [f.contact_position for f in drive.load.forces if f.kind == "spring"]
 
 
+def pin_positions(req: SolveRequest) -> list[float]:
+    """Every pinned position of a solve: the drive's load switches, and where the contact model's rigid
+    cluster meets its impact contact (``[design.contact] impact_velocity_max_m_s``, design/contact_limits.py)."""
+    out = switch_positions(req.drive) if req.drive is not None else []
+    contact = req.contact
+    if contact is not None and contact.settings.impact_velocity_max is not None and contact.impact_position is not None:
+        out = out + [p for p in [contact.impact_position] if p not in out]
+    return out
+
+
 def crossings(sol: MoveSolution, mv: Move, positions, tau: np.ndarray) -> np.ndarray:
     """Unit times where the move passes ``positions`` (where a load force switches on), both sides of each."""
     if not positions:
@@ -50,7 +60,7 @@ def pin_intervals(req: SolveRequest) -> list[tuple[int, float, int | None]]:
     out = []
     for k, mv in enumerate(req.moves):
         lo, hi = sorted((mv.start, mv.start + mv.stroke))
-        for pos in switch_positions(req.drive):
+        for pos in pin_positions(req):
             if lo < pos < hi:
                 tau_c = req.pin_times.get((k, pos))
                 idx = None if tau_c is None else min(int(tau_c / req.mesh.h), req.mesh.intervals - 1)
@@ -90,39 +100,44 @@ def pin_basis(req: SolveRequest, k: int, pos: float, first: int | None) -> tuple
     return onehot, m["a"][0], m["v"][0], 1.0
 
 
-def pin_rows(g, k: int, mv: Move, rotor, trans):
-    """Torque and belt force (row vectors) on both sides of every load switch the move passes.
-
-    The interval within the window and the local time are parameters, so the crossing may move
-    across the window between solves without a new build. A switch the move does not cross gets
-    a zero weight.
-    """
-    from ..drive.load import load_torque
-
-    b, mesh, x = g.built, g.request.mesh, g.vars[k]
+def pin_motion(g, k: int, pos: float, first: int | None):
+    """Velocity and acceleration [SI] of move ``k`` where it passes ``pos`` (the pin's window starting at mesh
+    interval ``first``), and the pin's weight (0: the move does not cross). The interval within the window and
+    the local time are parameters, so the crossing may move across the window between solves without a new build."""
+    if (k, pos) in g.pin_motions:  # the drive's rows and the contact limits read the same pin
+        return g.pin_motions[(k, pos)]
+    b, mesh, x, mv = g.built, g.request.mesh, g.vars[k], g.request.moves[k]
     d1 = mesh.degree + 1
     w = min(PIN_WINDOW, mesh.intervals)
+    first_ = 0 if first is None else first
+
+    def basis(part):
+        return lambda r: pin_basis(r, k, pos, first)[part]
+
+    e = b.params(f"pin e{k}.{pos}", basis(0), (w, 1))
+    la = b.params(f"pin a{k}.{pos}", basis(1), (d1, 1))
+    lv = b.params(f"pin v{k}.{pos}", basis(2), (d1, 1))
+    weight = b.param(f"pin w{k}.{pos}", basis(3))
+    A = x.A[first_:first_ + w, :]
+    a_unit = ca.mtimes(e.T, ca.mtimes(A, la))
+    v_unit = ca.mtimes(e.T, x.V[first_:first_ + w]) + mesh.h * ca.mtimes(e.T, ca.mtimes(A, lv))
+    out = g.pin_motions[(k, pos)] = (weight, v_unit * mv.stroke / g.T[k], a_unit * mv.stroke / g.T[k] ** 2)
+    return out
+
+
+def pin_rows(g, k: int, mv: Move, rotor, trans):
+    """Torque and belt force (row vectors) on both sides of every pinned point the move passes
+    (:func:`pin_motion`); a pin the move does not cross gets a zero weight."""
+    from ..drive.load import load_torque
+
     taus, forces = [], []
     for k_, pos, first in g.pins:
         if k_ != k:
             continue
-        first_ = 0 if first is None else first
-
-        def basis(part, first=first, pos=pos):
-            return lambda r: pin_basis(r, k, pos, first)[part]
-
-        e = b.params(f"pin e{k}.{pos}", basis(0), (w, 1))
-        la = b.params(f"pin a{k}.{pos}", basis(1), (d1, 1))
-        lv = b.params(f"pin v{k}.{pos}", basis(2), (d1, 1))
-        weight = b.param(f"pin w{k}.{pos}", basis(3))
-        A = x.A[first_:first_ + w, :]
-        a_unit = ca.mtimes(e.T, ca.mtimes(A, la))
-        v_unit = ca.mtimes(e.T, x.V[first_:first_ + w]) + mesh.h * ca.mtimes(e.T, ca.mtimes(A, lv))
-        v = v_unit * mv.stroke / g.T[k]
-        a = a_unit * mv.stroke / g.T[k] ** 2
+        weight, v, a = pin_motion(g, k, pos, first)
         eps = 1e-9 * max(abs(mv.stroke), 1e-3)
         for side in (-eps, eps):
-            terms = load_torque(rotor, trans, g.request.drive.load, ca.MX(pos + side), v, a)
+            terms = load_torque(rotor, trans, g.load, ca.MX(pos + side), v, a)
             taus.append(weight * terms.total)
             forces.append(weight * terms.load_force)
     return (ca.horzcat(*taus) if taus else ca.MX(1, 0)), (ca.horzcat(*forces) if forces else ca.MX(1, 0))
@@ -133,7 +148,7 @@ def initial_pin_times(req: SolveRequest, sols: list[MoveSolution]) -> dict:
     out = {}
     for k, mv in enumerate(req.moves):
         lo, hi = sorted((mv.start, mv.start + mv.stroke))
-        for pos in switch_positions(req.drive):
+        for pos in pin_positions(req):
             if lo < pos < hi:
                 cross = crossings(sols[k], mv, [pos], fine_grid(sols[k].mesh, 4))
                 out[(k, pos)] = float(cross[0]) if len(cross) else None

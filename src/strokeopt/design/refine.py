@@ -22,6 +22,7 @@ import numpy as np
 from .collocation import Mesh
 from .diagnose import diagnose
 from .fine_grid import drive_checks_fine, fine_grid_report
+from .free import free_values
 from .limits import ENFORCED_CHECKS
 from .nlp import Nlp, prepare
 from .objectives import TIME_SCALE, free_time
@@ -61,6 +62,8 @@ class Outcome:
     handover: list | None = None
     #: a free cycle time (min_time): the rate [spm] each re-solve found, the last the answer
     rates: list = field(default_factory=list)
+    #: the free model parameters found (design/free.py): element name -> value [SI]
+    free_values: dict = field(default_factory=dict)
 
     def handover_values(self) -> list[tuple[str, float]]:
         """(name, error [m]) of every handover error term at the solution."""
@@ -204,6 +207,14 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
         fine, _ = fine_grid_report(rated.moves, sols, settings.check_points)
         radius = motor = None
         worst = fine["worst_relative_violation"]
+        found = free_values(nlp, x)
+        if drive is not None and found:  # the checks see the load with the free parameters found
+            from copy import copy
+
+            from ..drive.spec import with_model_springs
+
+            drive = copy(drive)
+            drive.load = with_model_springs(drive.load, found)
         if drive is not None:
             radius = float(nlp.value(nlp.graph.radius, x).item())
             motor = choice.motor
@@ -228,4 +239,4 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
         warm = None
     value = nlp.graph.transform(objective_value(nlp, sol, x), nlp.request)
     return Outcome(nlp, x, sols, value, "optimal" if status == "Solve_Succeeded" else "acceptable", total_time,
-                   iterations, fine, radius, motor)
+                   iterations, fine, radius, motor, free_values=found)

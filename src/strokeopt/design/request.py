@@ -18,6 +18,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from .collocation import Mesh
+from .contact_setup import ContactDesign, contact_design
 from .settings import DesignSettings
 from ..drive.transmission import BeltPulley
 from ..errors import ProblemError
@@ -271,6 +272,11 @@ class SolveRequest:
     @cached_property
     def moves(self) -> list[Move]:
         return design_moves(self.problem, self.spm, self.settings)
+
+    @cached_property
+    def contact(self) -> ContactDesign | None:
+        """The contact limits of ``[design.contact]`` (None without it)."""
+        return contact_design(self.problem, self.settings)
 
     @cached_property
     def schedule(self):

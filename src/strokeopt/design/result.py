@@ -86,6 +86,10 @@ class Design:
     notes: list[str] = field(default_factory=list)
     motor_spec: Any = field(default=None, repr=False)  # the ServoMotor
     settings: Any = field(default=None, repr=False)  # the DesignSettings it was solved with
+    #: the design re-simulated in its contact model and judged (contact/verify.py ``design_verification``), or None
+    verification: dict | None = None
+    #: the free model parameters found ([design.free], design/free.py): one row each
+    free_parameters: list = field(default_factory=list)
 
     @property
     def solutions(self) -> list[MoveSolution]:
@@ -118,6 +122,8 @@ class Design:
             "solve_time_s": self.solve_time_s,
             "iterations": self.iterations,
             "notes": self.notes,
+            **({"verification": self.verification} if self.verification is not None else {}),
+            **({"free_parameters": self.free_parameters} if self.free_parameters else {}),
         }
 
     def check_value(self, name: str) -> float | None:

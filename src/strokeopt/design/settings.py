@@ -15,6 +15,25 @@ from .objectives import OBJECTIVES
 from .solver import check_solver_options
 
 MOTOR_CHOICES = ("fixed", "enumerate", "bonmin")
+
+
+@dataclass(frozen=True)
+class ContactSettings:
+    """``[design.contact]``: what the design holds of the contact model (design/contact_setup.py checks the names).
+
+    ``keep_closed``: contacts joining a follower to the driven body that must stay closed (their force at
+    least ``min_contact_force`` [N]) while the follower rides on it; ``impact_velocity_max`` [m/s]: the
+    velocity with which the cluster meets the ``[model.events] impact`` contact; ``lag_max`` [m]: the
+    largest lag the verification accepts; ``scene``: the scene whose bodies and elements count (None:
+    ``release`` if the problem has it, else its first).
+    """
+
+    keep_closed: tuple[str, ...] = ()
+    min_contact_force: float = 1.0
+    impact_velocity_max: float | None = None
+    lag_max: float = 0.05e-3
+    scene: str | None = None
+
 PULLEY_CHOICES = ("fixed", "optimise", "continuous")
 
 
@@ -49,6 +68,10 @@ class DesignSettings:
     refinements: int = 2
     include_pulley_inertia: bool = True
     solver_options: dict = field(default_factory=dict)
+    contact: ContactSettings | None = None
+    #: ``[design.free.<element>]``: (element, lower, upper stiffness [N/m]) of the model parameters that are
+    #: design variables (design/free.py checks the names)
+    free: tuple = ()
 
     @property
     def mesh(self) -> Mesh:
@@ -98,6 +121,50 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
         problem = check_solver_options(options)  # asks the solver itself, before any build
         if problem is not None:
             raise solver.error(*problem)
+    contact = parse_contact(f.table("contact", required=False))
+    free = parse_free(f.table("free", required=False))
     f.finish()
     return DesignSettings(objective, n, d, rest, jerk, from_law, accuracy, motor_choice, pulley, zmin, zmax,
-                          check_points, check_tol, refinements, pulley_inertia, options)
+                          check_points, check_tol, refinements, pulley_inertia, options, contact, free)
+
+
+def parse_free(f) -> tuple:
+    """Read ``[design.free.<element>]`` tables: ``stiffness_N_m = [lower, upper]`` (element names are checked
+    against the model by design/free.py); returns ``(element, lower, upper)`` per table."""
+    if f is None:
+        return ()
+    out = []
+    for name in list(f.data):
+        t = f.table(name)
+        bounds = t.raw("stiffness_N_m")
+        if (not isinstance(bounds, list) or len(bounds) != 2
+                or not all(isinstance(b, (int, float)) and not isinstance(b, bool) for b in bounds)):
+            raise t.error("stiffness_N_m", f"needs bounds [lower, upper] in N/m, got {bounds!r}")
+        lo, hi = float(bounds[0]), float(bounds[1])
+        # a stiffness of 1 N/m (a hair spring) to 1e9 N/m (a penalty contact); equal bounds fix it there
+        if not (1.0 <= lo <= hi <= 1e9):
+            raise t.error("stiffness_N_m", f"bounds {bounds!r} must satisfy 1 <= lower <= upper <= 1e9 (N/m)")
+        t.finish()
+        out.append((name, lo, hi))
+    f.finish()
+    return tuple(out)
+
+
+def parse_contact(f) -> ContactSettings | None:
+    """Read ``[design.contact]`` (names are checked against the model by design/contact_setup.py)."""
+    if f is None:
+        return None
+    keep = f.raw("keep_closed", [])
+    if not isinstance(keep, list) or not all(isinstance(x, str) for x in keep):
+        raise f.error("keep_closed", f"must be an array of contact names, got {keep!r}")
+    if len(set(keep)) != len(keep):
+        raise f.error("keep_closed", "names a contact twice")
+    # a contact force up to 10 kN (the needle bar's springs give 4.5 N; a loom's tens of newtons)
+    force = f.number("min_contact_force_N", 1.0, min=0.0, max=1e4)
+    # impact velocities: a stop is met at 0.01-100 m/s (the needle bar: 2-3 m/s)
+    vmax = f.number("impact_velocity_max_m_s", None, min=0.01, max=100.0)
+    # lag accepted by the verification: 0.1 um (a contact's deflection is 0.01 um) to 100 mm
+    lag = f.number("lag_max_mm", 0.05, min=1e-4, max=100.0) * 1e-3
+    scene = f.string("scene", None)
+    f.finish()
+    return ContactSettings(tuple(keep), force, vmax, lag, scene)

@@ -36,7 +36,9 @@ from dataclasses import replace
 import casadi as ca
 
 from .collocation import Mesh
+from .contact_limits import CONTACT_LIMITS
 from .fine_grid import move_results
+from .free import free_overrides, free_report
 from .limits import DRIVE_LIMITS, MOVE_LIMITS
 from .nlp import prepare
 from .objectives import OBJECTIVES, TORQUE_OBJECTIVES, free_time, needs_drive_error, unknown_objective_error
@@ -104,6 +106,11 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
         pd = 2 * best.radius
     wall = time.perf_counter() - t_start
     spm = best.nlp.request.spm  # the request's, or the highest rate of min_time
+    free = free_report(settings, problem.model, best.free_values) if best.free_values else []
+    if free:  # the design's problem: the file's with the values found (recorded as --set texts in design.json)
+        from ..io.problem_file import load_problem
+
+        problem = load_problem(problem.file, [*problem.overrides, *free_overrides(problem.model, best.free_values)])
     nlp, sols = best.nlp, best.sols
     stroke = stroke_from_solutions(problem, spm, sols, label=f"optimal ({objective})")
     moves = move_results(nlp.request.moves, sols)
@@ -112,6 +119,10 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
                     motor=None if motor is None else motor.name, notes=notes)
     design.motor_spec = motor
     design.settings = settings
+    design.free_parameters = free
+    for row in free:
+        design.notes.append(f"free model parameter {row['parameter']} = {row['value']:.5g} (bounds {row['lower']:g} "
+                            f"to {row['upper']:g})" + (f": at its {row['at_bound']} bound" if row["at_bound"] else ""))
     design.checks, design.active_constraints = _report_checks(best)
     if handover_check is not None and any(c["name"].startswith(HANDOVER_CHECK) for c in design.checks):
         design.checks = _verified_handover(design, *handover_check(design), settings.check_tolerance)
@@ -227,8 +238,14 @@ def _report_checks(best: Outcome) -> tuple[list[dict], list[str]]:
     checks += [dict(c) for c in best.fine.get("drive_checks", [])]
     if req.drive is not None:
         checks += [row for lim in DRIVE_LIMITS for row in lim.report(nlp, best)]
+    checks += [row for lim in CONTACT_LIMITS for row in lim.report(nlp, best)]
     for c in checks:
         value, limit = float(c["value"]), float(c["limit"])
+        if c.pop("lower", False):  # a lower bound (a contact force): the margin is what it has above the limit
+            scale = max(abs(limit), 1.0)
+            c["margin"] = (value - limit) / scale
+            c["ok"] = bool(value >= limit - tol * scale)
+            continue
         c["margin"] = 1.0 - value / limit if limit > 0 else (-math.inf if value > 0 else 0.0)
         c["ok"] = bool(value <= limit * (1 + tol))
     active = []

@@ -1,5 +1,5 @@
-"""Studies over many solves: the stitch-rate sweep (:func:`sweep_design`, :func:`fastest_feasible`)
-and the accuracy/time study of the mesh (:func:`mesh_study`).
+"""Studies over many solves: the stitch-rate sweep (:func:`sweep_design`, :func:`fastest_feasible`),
+the accuracy/time study of the mesh (:func:`mesh_study`) and what quietness costs (:func:`impact_study`).
 
 Each solve is a :func:`~.solve.solve_design` with the same default handover error terms
 (``error_terms=None``: the problem's). Figures: :mod:`strokeopt.report.design`.
@@ -14,7 +14,7 @@ from .collocation import Mesh
 from .nlp import clear_cache
 from .settings import DesignSettings
 from .solve import solve_design
-from ..errors import SolverError
+from ..errors import ProblemError, SolverError
 
 
 def sweep_design(problem, spms, *, objective: str | None = None, settings: DesignSettings | None = None,
@@ -95,3 +95,58 @@ def mesh_study(problem, *, objective: str | None = None, spm: float | None = Non
         r["objective_error_pct"] = 100.0 * abs(r["objective_value"] / ref - 1.0) if ref else None
     rows[-1]["reference"] = True
     return rows
+
+
+#: The most impact-velocity limits one study solves (each a solve and a simulation, a few seconds).
+IMPACT_POINTS_MAX = 20
+
+
+def impact_study(problem, velocities, *, objective: str | None = None, spm: float | None = None,
+                 settings: DesignSettings | None = None, progress=None, error_terms=None) -> list[dict]:
+    """What quietness costs: the design solved under each impact-velocity limit of ``velocities`` [m/s]
+    (``[design.contact] impact_velocity_max_m_s`` replaced, the rest of ``[design.contact]`` and
+    ``[design.free]`` as in the file), from the loosest to the tightest, each warm-started from the previous
+    and verified by re-simulation (contact/verify.py). One row per limit: the objective, peak torque, the free
+    parameters found, the simulated impact velocity and lag, the verdict; an infeasible limit with its reason.
+    """
+    from ..contact.verify import design_verification
+
+    settings = settings or getattr(problem, "design", None) or DesignSettings()
+    if settings.contact is None:
+        raise ProblemError(str(problem.file), "design.contact", "the impact study needs a [design.contact] section "
+                                                                "(the contact model the impact velocity is held in)")
+    rows, warm = [], None
+    values = sorted((float(v) for v in velocities), reverse=True)
+    it = progress(values) if progress is not None else values
+    for vmax in it:
+        t0 = time.perf_counter()
+        limited = replace(settings, contact=replace(settings.contact, impact_velocity_max=vmax))
+        row = {"impact_velocity_max_m_s": vmax}
+        try:
+            try:
+                d = solve_design(problem, objective=objective, spm=spm, settings=limited, warm_start=warm,
+                                 error_terms=error_terms)
+            except SolverError:
+                if warm is None:
+                    raise
+                # the previous limit's stroke may start IPOPT where it cannot restore feasibility: start afresh
+                d = solve_design(problem, objective=objective, spm=spm, settings=limited, error_terms=error_terms)
+        except SolverError as exc:
+            rows.append({**row, "feasible": False, "reason": exc.reason.splitlines()[0],
+                         "solve_time_s": time.perf_counter() - t0})
+            continue
+        warm = d
+        block = design_verification(d)
+        crit = {c["criterion"]: c for c in (block or {}).get("criteria", [])}
+        row.update({"feasible": d.status != "limits exceeded", "objective_value": d.objective_value,
+                    "objective_unit": d.objective_unit, "peak_torque_N_m": d.check_value("peak_torque"),
+                    **{f"{p['parameter']}": p["value"] for p in d.free_parameters},
+                    "simulated_impact_velocity_m_s": crit.get("impact velocity", {}).get("value"),
+                    "max_lag_mm": crit.get("lag", {}).get("value"),
+                    "verified": None if block is None else block["status"] == "ok",
+                    "verdict": None if block is None else block["verdict"],
+                    "solve_time_s": time.perf_counter() - t0})
+        if d.status == "limits exceeded":
+            row["reason"] = d.notes[0]
+        rows.append(row)
+    return sorted(rows, key=lambda r: r["impact_velocity_max_m_s"])

@@ -60,7 +60,8 @@ class LoadForce:
     ``kind = "spring"``: a compression spring met at ``contact_position`` [m]:
     beyond it (against ``direction``) it pushes with ``force`` (its preload)
     plus ``stiffness`` times the penetration; before it, nothing.
-    ``direction`` is +1 (pushes towards +x) or -1.
+    ``direction`` is +1 (pushes towards +x) or -1. ``spring``: the name of the contact model's spring
+    (``[model.springs]``) ``force`` and ``stiffness`` were derived from, or None (given in ``[drive]``).
     """
 
     name: str
@@ -69,6 +70,7 @@ class LoadForce:
     force: float
     stiffness: float = 0.0
     contact_position: float = 0.0
+    spring: str | None = None
 
     def __call__(self, s):
         if self.kind == "constant":

@@ -52,8 +52,9 @@ class DriveSpec:
                         self.allowable_tension)
 
 
-def parse_drive(f, base_dir: Path | None = None) -> DriveSpec:
-    """Read the ``[drive]`` table (a :class:`~strokeopt.io.fields.Fields`) of a problem file."""
+def parse_drive(f, base_dir: Path | None = None, model=None) -> DriveSpec:
+    """Read the ``[drive]`` table (a :class:`~strokeopt.io.fields.Fields`) of a problem file. ``model``: the
+    contact model (``[model]``), whose springs a load force may name (``model_spring``) instead of its numbers."""
     motor = f.string("motor", None)
     # 0.1 g (a knitting machine's screw nut is 3 g) to a tonne (a loom sley is 25 kg)
     mass = f.number("moving_mass_kg", min=1e-4, max=1e3)
@@ -90,7 +91,9 @@ def parse_drive(f, base_dir: Path | None = None) -> DriveSpec:
         name = row.string("name")
         kind = row.string("kind", choices=("spring", "constant"))
         direction = {"up": 1.0, "down": -1.0}[row.string("direction", choices=("up", "down"))]
-        if kind == "spring":
+        if kind == "spring" and row.has("model_spring"):
+            forces.append(model_spring_force(row, name, direction, model))
+        elif kind == "spring":
             # forces up to 100 kN, stiffnesses up to 1e9 N/m (a contact, not a spring), positions within 10 m
             forces.append(LoadForce(name, kind, direction, row.number("preload_N", 0.0, min=0.0, max=1e5),
                                     row.number("stiffness_N_m", min=0.0, max=1e9),
@@ -117,3 +120,35 @@ def parse_drive(f, base_dir: Path | None = None) -> DriveSpec:
     return DriveSpec(motor, Load(mass, gravity, tuple(forces), tuple(members)), limits, profile, tmin, tmax, belt,
                      cord, service, allowable, tuple(resolved), f.file)
 
+
+
+def model_spring_force(row, name: str, direction: float, model) -> LoadForce:
+    """A spring load force taken from the contact model's spring ``model_spring`` (one source for both): its
+    stiffness, and as preload the stiffness times its compression at installation (free minus installed length)."""
+    spring = row.string("model_spring")
+    for key in ("preload_N", "stiffness_N_m"):
+        if row.has(key):
+            raise row.error(key, f"comes from model_spring = {spring!r} ([model.springs.{spring}]); remove it")
+    if model is None:
+        raise row.error("model_spring", "names a spring of [model], but the problem has no [model] section")
+    if spring not in model.springs:
+        raise row.error("model_spring", f"unknown spring {spring!r}; [model.springs] has: {', '.join(model.springs) or 'none'}")
+    el = model.springs[spring]
+    if el.force_law is not None:
+        raise row.error("model_spring", f"spring {spring!r} has a force law; a load force needs a linear spring")
+    return LoadForce(name, "spring", direction, el.stiffness * el.preload, el.stiffness,
+                     row.number("contact_position_mm", min=-1e4, max=1e4) * 1e-3, spring)
+
+
+def with_model_springs(load: Load, stiffness: dict) -> Load:
+    """``load`` with the stiffness of the model springs in ``stiffness`` (name -> N/m, numbers or CasADi symbols)
+    replaced in every load force derived from them; the installed compression (preload length) stays."""
+    forces = []
+    for f in load.forces:
+        k = stiffness.get(f.spring) if f.spring is not None else None
+        if k is None:
+            forces.append(f)
+            continue
+        length = f.force / f.stiffness if f.stiffness else 0.0
+        forces.append(LoadForce(f.name, f.kind, f.direction, k * length, k, f.contact_position, f.spring))
+    return Load(load.moving_mass, load.gravity, tuple(forces))

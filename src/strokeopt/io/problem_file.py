@@ -15,6 +15,8 @@ from pathlib import Path
 
 from ..contact.model import parse_model
 from ..contact.scene import parse_scenes
+from ..design.contact_setup import check_contact
+from ..design.free import check_free
 from ..design.settings import parse_design
 from ..drive.spec import parse_drive
 from ..drive.transmission import PROFILE_PITCH, TEETH_RANGE, BeltPulley, ScrewLever, Transmission
@@ -74,7 +76,7 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
     model = parse_model(top.table("model", required=False), transmission)
     scenes = parse_scenes(top.table("scenes", required=False), model)
     drive_table = top.table("drive", required=False)
-    drive = parse_drive(drive_table, (path or Path(file)).parent) if drive_table is not None else None
+    drive = parse_drive(drive_table, (path or Path(file)).parent, model) if drive_table is not None else None
     if model is not None and model.transmission is not None and timing.intervals[0].start_position != 0:
         raise ProblemError(file, "timing.start_position_mm", "a model on the transmission's members starts at the "
                                                              "transmission's zero: start_position_mm must be 0")
@@ -86,6 +88,8 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
                                                                          f"{transmission.name}: {', '.join(stages)}")
     design_table = top.table("design", required=False)
     design = parse_design(design_table) if design_table is not None else None
+    check_contact(design.contact if design is not None else None, model, scenes, file)
+    check_free(design.free if design is not None else (), model, drive, file)
     servo_table = top.table("servo", required=False)
     servo = parse_servo(servo_table, timing, spm) if servo_table is not None else None
     top.finish()

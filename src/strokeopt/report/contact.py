@@ -101,6 +101,27 @@ def chain_lines(chain: dict, driven: str, s: dict) -> list[str]:
     return lines
 
 
+def verification_text(block: dict) -> str:
+    """The verification block (contact/verify.py ``verification``): one row per criterion, then the verdict."""
+    def shown(value, unit):
+        if value is None:
+            return "-"
+        if isinstance(value, bool):
+            return "yes" if value else "no"
+        return f"{value:.4g} {unit}".strip()
+
+    rows = [{"criterion": r["criterion"], "value": shown(r["value"], r["unit"]),
+             "limit": "none (not judged)" if r["limit"] is None else shown(r["limit"], r["unit"]),
+             "result": {True: "pass", False: "FAIL", None: "-"}[r["ok"]]} for r in block["criteria"]]
+    from .format import format_table
+
+    table = format_table(rows, [("criterion", "criterion"), ("value", "value"), ("limit", "limit"),
+                                ("result", "result")],
+                         title=f"verification: the stroke re-simulated in scene {block['scene']!r} "
+                               f"(contact model, CVODES) at {block['spm']:g} spm")
+    return f"{table}\n{block['verdict']}"
+
+
 def plot_scene(r, path=None):
     """Driven and follower velocities and the remaining gap N over the cam angle; impact and release marked."""
     ang = r.angle_deg

@@ -194,4 +194,59 @@ def design_summary(design: Design) -> dict:
     for key in ("problem", "problem_file", "cycle_time_s", "pulley_pitch_diameter_mm", "mesh", "checks",
                 "iterations", "notes"):
         out[key] = full[key]
+    if design.verification is not None:
+        out["verification"] = design.verification
+    if design.free_parameters:
+        out["free_parameters"] = design.free_parameters
     return out
+
+
+def impact_study_text(report: dict) -> str:
+    """The impact study (design/studies.py ``impact_study``): one row per impact-velocity limit."""
+    rows = report["rows"]
+    free = sorted({k for r in rows for k in r if k.startswith("model.")})
+    table = [{**r, "verified": "-" if r.get("verified") is None else ("yes" if r["verified"] else "NO"),
+              "why": r.get("reason") or ("" if r.get("verified") is not False else r.get("verdict", ""))} for r in rows]
+    cols = [("impact_velocity_max_m_s", "limit m/s"), ("feasible", "feasible"), ("objective_value", "objective"),
+            ("peak_torque_N_m", "peak N m"), *[(k, k.split(".")[2] + " " + k.split(".")[3]) for k in free],
+            ("simulated_impact_velocity_m_s", "simulated m/s"), ("max_lag_mm", "lag mm"), ("verified", "verified"),
+            ("solve_time_s", "solve + verify s"), ("why", "why not")]
+    title = (f"{report['problem']} at {report['spm']:g} spm: {report['objective']} under each impact-velocity limit "
+             f"(each design re-simulated in its contact model)")
+    return format_table(table, cols, title=title)
+
+
+def plot_impact_study(rows: list[dict], path=None, objective: str | None = None):
+    """What quietness costs: the objective over the impact-velocity limit; the simulated impact velocity beside it."""
+    import matplotlib.pyplot as plt  # here: text reports do not import matplotlib
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
+    ok = [r for r in rows if r["feasible"]]
+    lim = [r["impact_velocity_max_m_s"] for r in ok]
+    axes[0].plot(lim, [r["objective_value"] for r in ok], "o-")
+    bad = [r for r in ok if r.get("verified") is False]
+    if bad:
+        axes[0].plot([r["impact_velocity_max_m_s"] for r in bad], [r["objective_value"] for r in bad], "rx", ms=10,
+                     label="verification failed")
+        axes[0].legend(fontsize=8)
+    for r in rows:
+        if not r["feasible"]:
+            axes[0].axvline(r["impact_velocity_max_m_s"], color="0.7", ls=":")
+    unit = ok[0].get("objective_unit", "") if ok else ""
+    axes[0].set_ylabel(f"{objective or 'objective'} [{unit}]")
+    axes[0].set_title("what quietness costs (dotted: infeasible limits)")
+    sim = [r for r in ok if r.get("simulated_impact_velocity_m_s") is not None]
+    axes[1].plot([r["impact_velocity_max_m_s"] for r in sim], [r["simulated_impact_velocity_m_s"] for r in sim], "o",
+                 label="full simulation")
+    if lim:
+        axes[1].plot([min(lim), max(lim)], [min(lim), max(lim)], "k--", lw=0.8, label="the limit")
+    axes[1].set_ylabel("impact velocity [m/s]")
+    axes[1].set_title("each design re-simulated (contact model)")
+    axes[1].legend(fontsize=8)
+    for ax in axes:
+        ax.set_xlabel("impact velocity limit [m/s]")
+        ax.grid(True, alpha=0.3)
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig

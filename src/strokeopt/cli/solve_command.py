@@ -1,0 +1,211 @@
+"""``strokeopt solve``: one design (its check table, the classic laws beside it, the contact model's
+verification), a sweep of rates, a mesh or impact study; ``solve_once`` is shared with ``report``."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from ..errors import ProblemError
+from .common import _emit, _load, _plot_path, _write_figure, drive_used, progress_bar, spm_tag
+
+
+def _servo_handover_check(problem):
+    """The solve's handover check: the full servo simulation of the design on its motor and pulley (the
+    number `strokeopt accuracy --design` prints). Composed here: the design package does not import servo."""
+    if getattr(problem, "servo", None) is None or getattr(problem, "drive", None) is None:
+        return None
+
+    def check(design):
+        from ..servo.accuracy import stroke_accuracy
+
+        radius = None if design.pulley_teeth is not None else design.radius
+        result = stroke_accuracy(problem, design.stroke, design.spm, motor=design.motor_spec,
+                                 pulley_teeth=design.pulley_teeth, radius=radius)
+        return result.handover_error, "full servo simulation"
+
+    return check
+
+
+def _objective(args, problem) -> str | None:
+    """The objective a solve uses: --objective, else the file's."""
+    return args.objective or (problem.design.objective if problem.design else None)
+
+
+def solve_once(args, problem, progress=None):
+    """One design solve as ``strokeopt solve`` makes it: the design (with the full servo simulation's
+    handover check), its comparison with the classic laws, and the drive it used (``solve --json``)."""
+    from ..design.compare import compare_with_laws
+    from ..design.solve import solve_design
+
+    design = solve_design(problem, objective=args.objective, verbose=getattr(args, "verbose", False),
+                          progress=progress and (lambda it: progress(it, "motors")),
+                          handover_check=_servo_handover_check(problem))
+    _verify_solved(design)
+    comparison = compare_with_laws(design)
+    chosen = drive_used(args, problem, design.motor, design.pulley_teeth)
+    if problem.design is not None and (problem.design.motor_choice != "fixed" or problem.design.pulley != "fixed"):
+        chosen["from"] = (f"the solve's choice: design.motor_choice = {problem.design.motor_choice}, design.pulley "
+                          f"= {problem.design.pulley}")
+    return design, comparison, chosen
+
+
+def _cam_spec(args):
+    """The cam table of ``solve --out`` as its options ask (checked before the solve)."""
+    from ..io.design_file import CamTableSpec
+    from ..io.ranges import check_master_counts, parse_cam_resolution
+
+    spec = CamTableSpec(parse_cam_resolution(args.cam_table_resolution), args.master_unit, args.master_counts)
+    if args.out is None and spec != CamTableSpec():
+        raise ProblemError("--cam-table-resolution", "", "the cam table options shape the cam table of --out DIR: "
+                                                         "give --out DIR (or omit them)")
+    if args.master_unit == "counts":
+        check_master_counts(args.master_counts, spec.points)
+    return spec
+
+
+def cmd_solve(args) -> int:
+    from ..design.objectives import OBJECTIVES
+    from ..design.studies import fastest_feasible, mesh_study, sweep_design
+    from ..report.design import design_summary, design_text, plot_design, plot_design_sweep, plot_mesh_study
+    from ..report.format import drive_text, format_table, to_json
+
+    sweep = None
+    if args.spm is not None and ":" in args.spm and args.design is None:  # with --design: refused by _load
+        from ..io.ranges import parse_spm_range
+
+        sweep = parse_spm_range(args.spm)
+        args.spm = None
+    if args.objective is not None and args.objective not in OBJECTIVES:
+        raise ProblemError("--objective", "", f"{args.objective!r} is not one of {', '.join(OBJECTIVES)}")
+    problem = _load(args, fix_in_design=True)  # (an unwritable --out was refused before: cli.common.check_outputs)
+    cam_spec = _cam_spec(args)
+    progress = progress_bar(args, "solve", "solve")
+    if args.study == "mesh":
+        rows = mesh_study(problem, objective=args.objective, progress=progress and (lambda it: progress(it, "mesh")))
+        if args.json:
+            _emit(to_json({"status": "ok", "problem": problem.name, "spm": problem.spm, "study": "mesh",
+                           "drive": drive_used(args, problem), "rows": rows}))
+        else:
+            print(f"{problem.name} at {problem.spm:g} spm: the same design on each mesh (file's motor and pulley); "
+                  f"error against the last (finest) mesh")
+            print(format_table(rows, [("intervals", "intervals"), ("degree", "degree"), ("variables", "variables"),
+                                      ("objective_value", "objective"), ("objective_error_pct", "error %"),
+                                      ("violation_between_nodes", "violation between nodes"),
+                                      ("time_s", "build + solve time s")]))
+        _write_figure(lambda p: plot_mesh_study(rows, p),
+                      _plot_path(args, "solve_mesh", spm_tag(problem.spm), _objective(args, problem)), args)
+        return 0
+    if args.study == "impact":
+        return _impact_study(args, problem, progress)
+    if args.impact_range is not None:
+        raise ProblemError("--impact-range", "", "is for --study impact")
+    if sweep is not None:
+        rows = sweep_design(problem, sweep, objective=args.objective,
+                         progress=progress and (lambda it: progress(it, "spm")))
+        best = fastest_feasible(rows)
+        at_end = best is not None and all(r["feasible"] for r in rows)  # the sweep found no limit
+        if args.json:
+            _emit(to_json({"status": "ok" if best is not None else "infeasible", "problem": problem.name,
+                           "objective": args.objective or (problem.design.objective if problem.design else None),
+                           "rows": rows, "fastest_feasible_spm": best, "fastest_feasible_is_sweep_end": at_end}))
+        else:
+            print(format_table(rows, [("spm", "spm"), ("feasible", "feasible"), ("objective_value", "objective"),
+                                      ("motor", "motor"), ("pulley_teeth", "z"), ("peak_torque_N_m", "peak N m"),
+                                      ("rms_torque_N_m", "RMS N m"), ("solve_time_s", "solve time s"),
+                                      ("reason", "why not")],
+                               title=f"{problem.name}: optimal design over the stitch rate (warm-started)"))
+            print("\nno feasible stitch rate in the sweep" if best is None else
+                  f"\nfastest feasible stitch rate: >= {best:g} spm (the end of the sweep; every rate was feasible)"
+                  if at_end else f"\nfastest feasible stitch rate: {best:g} spm")
+        _write_figure(lambda p: plot_design_sweep(rows, p, _objective(args, problem)),
+                      _plot_path(args, "solve_sweep", spm_tag(sweep), _objective(args, problem)), args)
+        if best is None:
+            print("strokeopt: infeasible: no stitch rate of the sweep meets every limit (column 'why not')",
+                  file=sys.stderr)
+            return 1
+        return 0
+    design, comparison, chosen = solve_once(args, problem, progress)
+    if args.json:
+        _emit(to_json({**design_summary(design), "drive": chosen, "comparison": comparison}))
+    else:
+        print(design_text(design, comparison))
+        if design.verification is not None:
+            from ..report.contact import verification_text
+
+            print(verification_text(design.verification))
+        print(drive_text(chosen))
+    if args.out is not None:
+        for path in design.write(args.out, spec=cam_spec, extra={"comparison": comparison, "drive": chosen}):
+            print(f"written {path}", file=sys.stderr if args.json else sys.stdout)
+        from ..report.design_report import gather, write_report
+
+        summary = {**design_summary(design), "drive": chosen, "comparison": comparison}
+        info = write_report(gather(problem, design, summary), Path(args.out) / "report.html")  # `strokeopt report`
+        print(f"written {info['report']}", file=sys.stderr if args.json else sys.stdout)
+    # one figure: --plot FILE, else into --out DIR beside design.json, else strokeopt-out/
+    fig_path = _plot_path(args, "solve", spm_tag(design.spm), design.objective)
+    if fig_path is not None and args.plot is None and args.out is not None:
+        fig_path = Path(args.out) / fig_path.name
+    _write_figure(lambda p: plot_design(design, problem.stroke(design.spm), p), fig_path, args)
+    if design.status == "limits exceeded":
+        print(f"strokeopt: {design.notes[0]}", file=sys.stderr)
+        return 1
+    if design.status == "verification failed":
+        print(f"strokeopt: {design.verification['verdict']}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _verify_solved(design) -> None:
+    """A problem with scenes: re-simulate the solved stroke and judge it (contact/verify.py); a failure sets the
+    design's status to ``verification failed`` (exit 1), a design already over a limit keeps its status."""
+    from ..contact.verify import design_verification
+
+    design.verification = design_verification(design)
+    if design.verification is not None and design.verification["status"] != "ok" and design.status != "limits exceeded":
+        design.status = "verification failed"
+
+
+def _impact_range(text: str | None) -> list[float]:
+    """``--impact-range MIN:MAX[:POINTS]`` -> the impact-velocity limits [m/s]."""
+    from ..design.studies import IMPACT_POINTS_MAX
+
+    if text is None:
+        raise ProblemError("--impact-range", "", "--study impact needs the limits: --impact-range MIN:MAX[:POINTS] "
+                                                 "in m/s, e.g. 1.6:2.9:8")
+    parts = text.split(":")
+    try:
+        lo, hi = float(parts[0]), float(parts[1])
+        n = int(parts[2]) if len(parts) == 3 else 8
+    except (ValueError, IndexError):
+        raise ProblemError("--impact-range", "", f"expected MIN:MAX[:POINTS], got {text!r}") from None
+    # the limits a stop is met at: 0.01-100 m/s, as design.contact.impact_velocity_max_m_s
+    if len(parts) > 3 or not (0.01 <= lo < hi <= 100.0) or not 2 <= n <= IMPACT_POINTS_MAX:
+        raise ProblemError("--impact-range", "", f"needs 0.01 <= MIN < MAX <= 100 (m/s) and 2 <= POINTS <= "
+                                                 f"{IMPACT_POINTS_MAX}, got {text!r}")
+    return [lo + (hi - lo) * k / (n - 1) for k in range(n)]
+
+
+def _impact_study(args, problem, progress) -> int:
+    from ..design.studies import impact_study
+    from ..report.design import impact_study_text, plot_impact_study
+    from ..report.format import to_json
+
+    velocities = _impact_range(args.impact_range)
+    rows = impact_study(problem, velocities, objective=args.objective,
+                        progress=progress and (lambda it: progress(it, "limit")))
+    good = [r for r in rows if r["feasible"] and r.get("verified") is not False]
+    objective = _objective(args, problem)
+    report = {"status": "ok" if good else "infeasible", "problem": problem.name, "spm": problem.spm,
+              "study": "impact", "objective": objective, "drive": drive_used(args, problem), "rows": rows}
+    if args.json:
+        _emit(to_json(report))
+    else:
+        print(impact_study_text(report))
+    _write_figure(lambda p: plot_impact_study(rows, p, objective),
+                  _plot_path(args, "solve_impact", spm_tag(problem.spm), objective), args)
+    if not good:
+        print("strokeopt: infeasible: no impact-velocity limit of the study gives a verified design", file=sys.stderr)
+        return 1
+    return 0
