@@ -36,9 +36,11 @@ def pulley_setting(req: SolveRequest) -> tuple[float, float, float, float]:
     return lo, hi, start, 1.0
 
 
-def peak_limit(motor, drive) -> float:
-    """The motor's torque limit on the drive (:func:`strokeopt.drive.checks.torque_limit`)."""
-    return torque_limit(motor, drive.limits)
+def peak_limit(motor, drive, reserve: float = 0.0) -> float:
+    """The torque the design may use of the motor's limit on the drive
+    (:func:`strokeopt.drive.checks.torque_limit`), less ``reserve`` (a fraction, ``[design]
+    torque_reserve_pct``: left to the servo loop, whose torque command exceeds the rigid load's)."""
+    return torque_limit(motor, drive.limits) * (1.0 - reserve)
 
 
 @dataclass
@@ -80,6 +82,7 @@ class DriveModel:
         inertia = b.param("pulley inertia factor", lambda r: pulley_setting(r)[3]) * drive.pulley_inertia(2 * radius)
         trans = BeltPulley(2 * radius, inertia)
         pct = drive.limits.peak_limit_pct / 100
+        reserve = req.settings.torque_reserve
         if choice.candidates:
             cands = choice.candidates
             pick = b.var("motor", (len(cands), 1), 0.0, 1.0, [1.0] + [0.0] * (len(cands) - 1))
@@ -90,25 +93,26 @@ class DriveModel:
                 return ca.dot(pick, ca.DM(values))
 
             rotor = mix([m.rotor_inertia for m in cands])
-            peak_lim = mix([peak_limit(m, drive) for m in cands])
+            peak_lim = mix([peak_limit(m, drive, reserve) for m in cands])
             rated = mix([m.rated_torque for m in cands])
             speed = mix([m.rated_speed for m in cands])
             # for messages: the loosest limits of the candidates
-            peak_num = max(peak_limit(m, drive) for m in cands)
+            peak_num = max(peak_limit(m, drive, reserve) for m in cands)
             rated_num = max(m.rated_torque for m in cands)
             speed_num = max(m.rated_speed for m in cands)
             motor_name = "any catalogue motor"
         else:
             m = choice.motor
             rotor = b.param("rotor inertia", lambda r: r.choice.motor.rotor_inertia)
-            peak_num, rated_num, speed_num = peak_limit(m, drive), m.rated_torque, m.rated_speed
-            peak_lim = b.param("peak limit", lambda r: peak_limit(r.choice.motor, r.drive))
+            peak_num, rated_num, speed_num = peak_limit(m, drive, reserve), m.rated_torque, m.rated_speed
+            peak_lim = b.param("peak limit", lambda r: peak_limit(r.choice.motor, r.drive, r.settings.torque_reserve))
             rated = b.param("rated torque", lambda r: r.choice.motor.rated_torque)
             speed = b.param("rated speed", lambda r: r.choice.motor.rated_speed)
             motor_name = m.name  # for messages: a relaxed build (which names them) is never reused
         g.radius = radius
         peak_what = (f"peak_torque (peak torque, {motor_name}: {'%.3g' % peak_num} N m"
-                     f"{', drive limit %g %% of rated' % drive.limits.peak_limit_pct if pct * (rated_num) < peak_num + 1e-12 and not choice.candidates else ''})")
+                     f"{', drive limit %g %% of rated' % drive.limits.peak_limit_pct if pct * rated_num * (1 - reserve) < peak_num + 1e-12 and not choice.candidates else ''}"
+                     f"{', %g %% kept in reserve' % (100 * reserve) if reserve else ''})")
         period = b.param("period", lambda r: r.period) * g.time_scale
         return cls(radius, r_ref, inertia, trans, rotor, peak_lim, rated, speed, peak_num, rated_num, speed_num,
                    motor_name, peak_what, drive.tau_ref, period)

@@ -49,7 +49,9 @@ class DesignSettings:
     motion law on that move instead. ``accuracy``: allowed position error at
     the handover [m]. ``check_points``: fine-grid points per mesh interval;
     ``check_tolerance``: relative violation between nodes that triggers a
-    mesh refinement (at most ``refinements`` doublings).
+    mesh refinement (at most ``refinements`` doublings). ``torque_reserve``: the share of the
+    motor's torque limit the design leaves unused, for the servo loop (its torque command exceeds
+    the rigid load's near the limit).
     """
 
     objective: str = "min_peak_torque"
@@ -72,6 +74,7 @@ class DesignSettings:
     #: ``[design.free.<element>]``: (element, lower, upper stiffness [N/m]) of the model parameters that are
     #: design variables (design/free.py checks the names)
     free: tuple = ()
+    torque_reserve: float = 0.0
 
     @property
     def mesh(self) -> Mesh:
@@ -109,6 +112,8 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
     check_tol = f.number("check_tolerance", 0.005, min=1e-12, max=1.0)
     refinements = f.number("refinements", 2, integer=True, min=0, max=6)
     pulley_inertia = f.boolean("include_pulley_inertia", True)
+    # 0 (the rigid load may use the whole limit) to 90 % (a design that uses a tenth of its motor)
+    reserve = f.number("torque_reserve_pct", 0.0, min=0.0, max=90.0) / 100
     solver = f.table("solver", required=False)
     options = {}
     if solver is not None:
@@ -125,7 +130,7 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
     free = parse_free(f.table("free", required=False))
     f.finish()
     return DesignSettings(objective, n, d, rest, jerk, from_law, accuracy, motor_choice, pulley, zmin, zmax,
-                          check_points, check_tol, refinements, pulley_inertia, options, contact, free)
+                          check_points, check_tol, refinements, pulley_inertia, options, contact, free, reserve)
 
 
 def parse_free(f) -> tuple:

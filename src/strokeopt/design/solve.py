@@ -123,6 +123,10 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     for row in free:
         design.notes.append(f"free model parameter {row['parameter']} = {row['value']:.5g} (bounds {row['lower']:g} "
                             f"to {row['upper']:g})" + (f": at its {row['at_bound']} bound" if row["at_bound"] else ""))
+    if settings.torque_reserve and req.drive is not None:
+        design.notes.append(f"torque reserve: the design uses at most {100 * (1 - settings.torque_reserve):g} % of "
+                            f"the torque limit, {100 * settings.torque_reserve:g} % kept in reserve for the servo "
+                            "loop ([design] torque_reserve_pct)")
     design.checks, design.active_constraints = _report_checks(best)
     if handover_check is not None and any(c["name"].startswith(HANDOVER_CHECK) for c in design.checks):
         design.checks = _verified_handover(design, *handover_check(design), settings.check_tolerance)

@@ -138,6 +138,11 @@ def _binding_of(reason: str) -> str:
 CONFIRM_TOLERANCE = 2e-3
 #: Trial rates of the confirming search at most, per accuracy.
 CONFIRM_TRIALS = 6
+#: Re-solves of ``min_time`` with a torque reserve at most, per accuracy: where the servo's torque command
+#: passes the torque limit that the rigid load of the design meets, the design keeps the excess unused
+#: (``[design] torque_reserve_pct``) and is solved again; the margin added to each step.
+RESERVE_STEPS = 2
+RESERVE_MARGIN = 2e-3
 #: Consecutive trial rates without a design (the design's own error term cannot meet the accuracy
 #: there) after which the confirming search gives up: lower rates do not help once the error is
 #: set by the table, the encoder and the belt's vibration rather than by the speed.
@@ -161,14 +166,17 @@ class _Trial:
 
 
 def _confirm(problem, design, spm: float, acc: float) -> _Trial:
-    """The full servo simulation of ``design``'s stroke at its rate: does it meet ``acc`` within the torque limit?"""
+    """The full servo simulation of ``design``'s stroke at its rate: does it meet ``acc`` within the torque
+    limit? The accuracy within the design's ``check_tolerance``: the design holds its error term at
+    instants of the handover window, and between two of them the error may peak that much higher."""
     res = handover_accuracy(problem, design.stroke, spm)
-    excess = max(res.handover_error / acc, res.peak_torque_command / res.torque_limit) - 1.0
+    tol = design.settings.check_tolerance if design.settings is not None else 0.0
+    excess = max(res.handover_error / (acc * (1 + tol)), res.peak_torque_command / res.torque_limit) - 1.0
     reason = ""
     if res.torque_limited:
         reason = (f"torque limit: the servo's torque command reaches {res.peak_torque_command:.2f} N m, "
                   f"limit {res.torque_limit:.2f} N m")
-    elif res.handover_error > acc:
+    elif res.handover_error > acc * (1 + tol):
         reason = f"handover accuracy: the full simulation of the design gives {res.handover_error * 1e3:.4f} mm"
     return _Trial(spm, excess, reason, design, res)
 
@@ -198,10 +206,11 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
     say = progress or (lambda step, text: None)
     spm0 = problem.spm if start is None else start
     warm, ceiling, points = None, None, {}
+    reserve = base.torque_reserve  # carried from accuracy to accuracy
     confirmed, prev_acc = None, None  # the latest confirmed trial and its accuracy
     for acc in sorted(accuracies, reverse=True):
         # the same drive as the classic law: the problem's motor and pulley
-        settings = replace(base, accuracy=acc, motor_choice="fixed", pulley="fixed")
+        settings = replace(base, accuracy=acc, motor_choice="fixed", pulley="fixed", torque_reserve=reserve)
         tag = f"optimal {acc * 1e3:g} mm"
         if ceiling is not None and ceiling <= 0.0:
             points[acc] = TradeoffPoint(acc, "optimal", None, "handover_accuracy", None,
@@ -219,12 +228,31 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
         except SolverError as exc:
             say(tag, f"min_time: no design ({exc.reason.splitlines()[0]})")
             points[acc] = TradeoffPoint(acc, "optimal", None, _binding_of(exc.reason), None, exc.reason)
+            ceiling = 0.0  # a design of a tighter accuracy would meet this one
             continue
         warm, spm0 = d, d.spm
         top = d.spm if ceiling is None else min(d.spm, ceiling)
         binding = _binding_of(d.notes[0].split("bound by:", 1)[-1])
         say(tag, f"min_time {d.spm:.1f} spm ({binding}); full simulation")
         hi = _confirm(problem, d, top, acc) if top == d.spm else _Trial(top, math.inf)
+        for _ in range(RESERVE_STEPS):
+            res = hi.result
+            if hi.ok or res is None or not res.torque_limited or res.handover_error > acc:
+                break
+            # the loop's torque command passes the limit the rigid load meets: keep the excess in reserve
+            reserve = 1.0 - (1.0 - reserve) * res.torque_limit / res.peak_torque_command * (1.0 - RESERVE_MARGIN)
+            settings = replace(settings, torque_reserve=reserve)
+            try:
+                d = solve_design(problem, objective="min_time", spm=d.spm, settings=settings, warm_start=d)
+            except SolverError as exc:
+                say(tag, f"min_time with {100 * reserve:.1f} % torque reserve: no design ({exc.reason.splitlines()[0]})")
+                break
+            warm, spm0 = d, d.spm
+            top = d.spm if ceiling is None else min(d.spm, ceiling)
+            binding = "torque_limit"
+            say(tag, f"min_time {d.spm:.1f} spm with {100 * reserve:.1f} % of the torque limit in reserve for the "
+                     "loop; full simulation")
+            hi = _confirm(problem, d, top, acc) if top == d.spm else _Trial(top, math.inf)
         if top != d.spm:  # the looser accuracy's rate bounds this one: the min_time design runs there too
             from ..design.result import stroke_from_solutions
 
