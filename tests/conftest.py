@@ -10,6 +10,14 @@ ROOT = Path(__file__).resolve().parents[1]
 REFERENCE = ROOT / "problems" / "deco2000_needle_bar.toml"
 
 
+def stated_k2(text: str) -> str:
+    """The reference's text with the drive's k2 load force stated by its own numbers instead of
+    ``model_spring = "k2"`` (for variants without [model], or that state k2 twice on purpose)."""
+    import re
+
+    return re.sub(r'model_spring = "k2"[^\n]*\n', "preload_N = 15.39\nstiffness_N_m = 900\n", text)
+
+
 @pytest.fixture(scope="session")
 def reference_path() -> Path:
     return REFERENCE

@@ -6,6 +6,7 @@ import casadi as ca
 import pytest
 
 from strokeopt import ForceLaw, ProblemError, load_problem
+from conftest import stated_k2
 from strokeopt.cli.main import main
 
 
@@ -95,8 +96,8 @@ def test_force_law_and_stiffness_exclusive(write_problem):
 
 
 def test_problem_without_model_still_loads(write_problem):
-    path = write_problem(lambda t: t.split("# ---------------------------------------------------------------"
-                                           "------------ dynamic model")[0])
+    path = write_problem(lambda t: stated_k2(t).split("# ---------------------------------------------------------------"
+                                                      "------------ dynamic model")[0])
     p = load_problem(path)
     assert p.model is None and p.scenes is None
 
