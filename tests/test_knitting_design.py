@@ -127,3 +127,23 @@ def test_pulley_choice_on_a_screw_lever_is_one_line(capsys):
     assert main(["solve", str(KNITTING), "--set", 'design.pulley="optimise"']) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "design.pulley" in err and "screw_lever" in err
+
+
+def test_bench_registers_the_step_design():
+    from strokeopt.bench import design  # noqa: F401  (registers the design benchmarks)
+    from strokeopt.bench.registry import REGISTRY
+
+    assert REGISTRY["design_step"].target_s == 1.0  # the step-move design under 1 s (strokeopt bench)
+
+
+def test_min_rms_torque_of_a_stepper_builds_its_torque_integral():
+    # a stepper has no rated torque (no RMS limit), but the objective still reads the integral of torque squared
+    problem = load_problem(KNITTING, ["machine.spm=400"])  # 15 ms steps: under the pull-out curve
+    design = solve_design(problem, objective="min_rms_torque")
+    assert design.status in ("optimal", "acceptable") and all(c["ok"] for c in design.checks)
+    k = design.stroke.sample(20001)
+    from strokeopt.drive.load import load_torque
+
+    tau = load_torque(design.motor_spec, problem.transmission, problem.drive.load, k.s, k.v, k.a).total
+    rms = float(np.sqrt(np.trapezoid(tau**2, k.t) / (k.t[-1] - k.t[0])))
+    assert design.objective_value == pytest.approx(rms, rel=0.01)

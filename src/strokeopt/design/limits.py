@@ -179,6 +179,8 @@ class RmsTorque(Limit):
         from ..drive.load import load_torque
 
         dm, b, mesh, mv = g.drive_model, g.built, g.request.mesh, g.request.moves[k]
+        if dm.rated is None and g.request.objective not in RMS_OBJECTIVES:  # a stepper: not a limit, not asked for
+            return
         x_q, w_q = mesh.quadrature
         sq, vq, aq = (g.si(k, x_q, kind) for kind in ("s", "v", "a"))  # N x len(x_q)
         tq = load_torque(dm.rotor, dm.trans, g.load, sq, vq, aq).total / dm.tau_ref
@@ -197,6 +199,10 @@ class RmsTorque(Limit):
                          "N m", lambda sig, r=dm.rated_num, tr=dm.tau_ref: math.sqrt(r**2 + sig * tr**2), None,
                          "rms_torque")
         g.built.limit(lim, g.mean_sq - (dm.rated / dm.tau_ref) ** 2)
+
+
+#: the objectives that read the integral of torque squared (:class:`RmsTorque`)
+RMS_OBJECTIVES = ("min_rms_torque", "min_energy")
 
 
 class BeltTension(Limit):
