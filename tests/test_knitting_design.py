@@ -95,9 +95,11 @@ def test_min_time_is_the_shortest_step_under_the_pull_out_curve(knitting, fastes
 
 
 def test_min_time_step_verified_in_the_elastic_chain(fastest):
-    # the solve re-simulates its stroke in the problem's scene (contact/verify.py): the elastic chain with
-    # its clearances finishes and gives finite link forces at the design's rate
-    block = fastest.verification
+    # `strokeopt solve` re-simulates its stroke in the problem's scene (contact/verify.py): the elastic chain
+    # with its clearances finishes and reports its link forces at the design's rate
+    from strokeopt import design_verification
+
+    block = design_verification(fastest)  # what `strokeopt solve` runs after the solve
     assert block["scene"] == "step" and block["status"] == "ok" and block["spm"] == pytest.approx(fastest.spm)
     rows = {r["criterion"]: r for r in block["criteria"]}
     f6 = _peak_f6(fastest.problem, fastest.stroke, fastest.spm)
