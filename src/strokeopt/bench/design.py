@@ -170,3 +170,27 @@ def _bench_design_impact_study() -> BenchResult:
                                       f"{verified} of {len(rows)} verified")],
                        measured_s=t_study, ratio=t_study / t_one, ratio_label="study / one verified solve",
                        notes=["each limit is a new NLP structure (the limit is part of the settings)"])
+
+
+@benchmark("design_step", "the knitting drive's 6 ms step move (problems/knitting_stitch_density.toml, its "
+                          "objective, the pull-out curve reported): build + solve through the screw and lever",
+           target_s=1.0)
+def _bench_design_step() -> BenchResult:
+    p = load_problem(reference_problem_path("knitting_stitch_density.toml"), ["design.enforce_pull_out=false"])
+
+    def cold(options=None):
+        clear_cache()
+        t0 = time.perf_counter()
+        d = solve_design(p, solver_options=options)
+        return time.perf_counter() - t0, d
+
+    t_file, d = min((cold() for _ in range(2)), key=lambda r: r[0])
+    t_mx, _ = min((cold({"expand": False}) for _ in range(2)), key=lambda r: r[0])
+    warm = best_time(lambda: solve_design(p, warm_start=d), repeat=3)
+    return BenchResult(rows=[BenchRow("build + solve, the file's options (expand = true)", t_file,
+                                      f"{d.objective}, {len(d.moves)} moves x {d.mesh.intervals} intervals"),
+                             BenchRow("build + solve, not expanded (the default for a servo term)", t_mx),
+                             BenchRow("re-solve, built solver, warm start", warm)],
+                       measured_s=t_file, ratio=t_mx / t_file, ratio_label="not expanded / expanded",
+                       notes=["one design: both moves (step up, step back) in one NLP, the torque through the "
+                              "screw and lever's J(phi), J'(phi) at every collocation node"])

@@ -70,14 +70,15 @@ def _row(criterion: str, value, limit, unit: str, ok) -> dict:
 
 
 def verification(result: SceneResult, lag_max: float | None = None, impact_velocity_max: float | None = None,
-                 handover: dict | None = None) -> dict:
+                 handover: dict | None = None, reported: tuple = ()) -> dict:
     """The verdict of a simulated cycle against the design's criteria, one row each (value, limit, pass/fail):
 
     * premature release: gap N closed (or the needle released) before the impact -- always judged;
     * lag: the largest lag before the impact against ``lag_max`` [m] (None: reported, not judged);
     * impact velocity against ``impact_velocity_max`` [m/s] (None: reported, not judged), within
       :data:`IMPACT_TOLERANCE`;
-    * handover accuracy: ``handover``, a check row of the design (``value``, ``limit`` in mm, ``ok``), if given.
+    * handover accuracy: ``handover``, a check row of the design (``value``, ``limit`` in mm, ``ok``), if given;
+    * ``reported``: more rows (criterion, value, unit), reported and not judged (an elastic chain's link forces).
 
     Returns ``{"scene", "status": "ok" | "verification failed", "criteria": [...], "failed": [names], "verdict"}``.
     """
@@ -96,6 +97,7 @@ def verification(result: SceneResult, lag_max: float | None = None, impact_veloc
                          else bool(v <= impact_velocity_max * (1 + IMPACT_TOLERANCE))))
     if handover is not None:
         rows.append(_row("handover accuracy", handover["value"], handover["limit"], "mm", bool(handover["ok"])))
+    rows += [_row(criterion, value, None, unit, None) for criterion, value, unit in reported]
     failed = [r for r in rows if r["ok"] is False]
     if failed:
         verdict = "verification failed: " + "; ".join(
@@ -104,7 +106,8 @@ def verification(result: SceneResult, lag_max: float | None = None, impact_veloc
     else:
         judged = [r["criterion"] for r in rows if r["ok"]]
         verdict = (f"verified in scene {result.scene!r} at {result.spm:g} spm: " +
-                   (", ".join(judged) + " within limits" if judged else "no criterion to judge"))
+                   (", ".join(judged) + " within limits" if judged else "no criterion to judge") +
+                   ("; " + ", ".join(f"{c} {v:.4g} {u}" for c, v, u in reported) + " (reported)" if reported else ""))
     return {"scene": result.scene, "spm": result.spm, "status": "verification failed" if failed else "ok",
             "criteria": rows, "failed": [r["criterion"] for r in failed], "verdict": verdict}
 
@@ -122,8 +125,12 @@ def design_verification(design, scene: str | None = None, options: SimulationOpt
     scene = scene or (contact.scene if contact is not None and contact.scene else default_scene(problem.scenes))
     result = verify(design, scene, options)
     handover = next((c for c in design.checks if c["name"].startswith("handover accuracy")), None)
+    from .chain import chain_results  # a model on a transmission's members: its links' peak forces
+
+    links = chain_results(problem, result, design.stroke).get("links", [])
+    reported = tuple((f"peak force of link {k['link']}", k["peak_abs"], k["unit"]) for k in links)
     block = verification(result, None if contact is None else contact.lag_max,
-                         None if contact is None else contact.impact_velocity_max, handover)
+                         None if contact is None else contact.impact_velocity_max, handover, reported)
     block["cpu_time_s"] = result.cpu_time_s
     return block
 

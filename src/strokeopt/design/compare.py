@@ -54,11 +54,14 @@ def _stroke_measures(design: Design, stroke: StrokeFunction, samples: int = 20_0
             if itv.is_move:
                 moving |= (k.t >= t0) & (k.t <= t0 + dur)
         dt = k.t[1] - k.t[0]
-        row.update(peak_torque_N_m=checks["peak_torque"], rms_torque_N_m=checks["rms_torque"],
-                   energy=float(np.sum(tau[moving] ** 2) * dt),
-                   peak_speed_rpm=checks["peak_speed"])
+        row.update(peak_torque_N_m=checks["peak_torque"], energy=float(np.sum(tau[moving] ** 2) * dt))
+        # a servo's RMS torque and speed; a stepper's demand against its pull-out curve and its step rate
+        row.update({key: checks[name] for name, key in _CHECK_MEASURES if name in checks})
     return row
 
+
+_CHECK_MEASURES = (("rms_torque", "rms_torque_N_m"), ("peak_speed", "peak_speed_rpm"),
+                   ("pull_out_torque", "pull_out_pct"), ("step_rate", "step_rate_Hz"))
 
 _MEASURE_OF = {"min_peak_torque": "peak_torque_N_m", "min_rms_torque": "rms_torque_N_m", "min_energy": "energy",
                "min_peak_accel": "a_max_m_s2", "min_accel_squared": "accel_squared", "min_jerk": "jerk_squared"}

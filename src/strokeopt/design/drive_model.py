@@ -1,16 +1,20 @@
-"""The drive in the NLP: pulley radius, motor, and the motor torque and belt force of every move and dwell.
+"""The drive in the NLP: transmission, motor, and the motor torque, speed and belt force of every move and dwell.
 
 Built by :func:`.limits.build_drive` before the limits that read it (the drive package's load model,
-:func:`~strokeopt.drive.sizing.load_torque`, on CasADi symbols). The pulley radius is a
-decision variable scaled by a reference radius: free between the catalogue's bounds, or held at a
-tooth count's radius by equal bounds. A fixed pulley's inertia is its catalogue value: the inertia
-model times a parameter (catalogue / model). Both cases are one NLP structure, so one built
-solver serves the whole catalogue search. The motor is fixed (its numbers are parameters) or a
-Bonmin choice among candidates (binary weights).
+:func:`~strokeopt.drive.load.load_torque`, on CasADi symbols: ``T = J(phi) phi'' + 1/2 J'(phi) phi'^2 +
+loads`` through any transmission, its transfer functions by AD). A belt pulley is the constant-ratio case
+with a choice: its radius is a decision variable scaled by a reference radius, free between the
+catalogue's bounds, or held at a tooth count's radius by equal bounds; a fixed pulley's inertia is its
+catalogue value (the inertia model times a parameter, catalogue / model). Both are one NLP structure,
+so one built solver serves the whole catalogue search. Any other transmission (a screw and lever) is
+the problem's own: nothing to choose, no radius. The motor is fixed (its numbers are parameters) or a
+Bonmin choice among candidates (binary weights); a stepper's limits are its pull-out curve (a
+piecewise-linear CasADi interpolant of the catalogue table) and its step rate.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -19,7 +23,7 @@ import numpy as np
 
 from .pins import pin_rows
 from .request import SolveRequest
-from ..drive.checks import torque_limit
+from ..drive.checks import is_stepper, torque_limit
 from ..drive.transmission import BeltPulley
 
 
@@ -36,6 +40,19 @@ def pulley_setting(req: SolveRequest) -> tuple[float, float, float, float]:
     return lo, hi, start, 1.0
 
 
+def pull_out_function(motor, limits):
+    """A stepper's pull-out torque over the safety factor as a CasADi function of the motor speed [rad/s]
+    (either sense): the catalogue table, linear between its points, flat below the first (as
+    :meth:`~strokeopt.drive.catalogue.StepperMotor.pull_out`); the step-rate limit keeps the speed
+    inside the table."""
+    w = np.asarray(motor.pull_out_speed, dtype=float)
+    t = np.asarray(motor.pull_out_torque, dtype=float) / limits.pull_out_safety_factor
+    if w[0] > 0:  # flat to standstill
+        w, t = np.concatenate([[0.0], w]), np.concatenate([[t[0]], t])
+    grid = np.concatenate([-w[:0:-1], w])  # mirrored: the same curve in both senses
+    return ca.interpolant("pull_out", "linear", [grid.tolist()], np.concatenate([t[:0:-1], t]).tolist())
+
+
 def peak_limit(motor, drive, reserve: float = 0.0) -> float:
     """The torque the design may use of the motor's limit on the drive
     (:func:`strokeopt.drive.checks.torque_limit`), less ``reserve`` (a fraction, ``[design]
@@ -47,10 +64,10 @@ def peak_limit(motor, drive, reserve: float = 0.0) -> float:
 class DriveModel:
     """The drive's symbols of one NLP structure (see the module docstring), for the limits and objectives."""
 
-    radius: Any
+    radius: Any  # the pulley radius [m]; None for the problem's own transmission (nothing to choose)
     r_ref: float
-    inertia: Any  # of the pulley [kg m^2]
-    trans: BeltPulley
+    inertia: Any  # of the pulley, or the own transmission's [kg m^2]
+    trans: Any  # BeltPulley (radius a variable) or the problem's Transmission
     rotor: Any
     peak_lim: Any  # torque limits and rated speed of the motor (parameters, or Bonmin mixtures)
     rated: Any
@@ -63,6 +80,9 @@ class DriveModel:
     tau_ref: float  # torque scale [N m]: the same for every motor, so one solver serves them all
     period: Any
     v: list = field(default_factory=list)  # speed at the hull points of each move [m/s]
+    omega: list = field(default_factory=list)  # motor speed at the same points [rad/s]
+    torque_omega: list = field(default_factory=list)  # motor speed where each move's torque is held [rad/s]
+    pull_out: Any = None  # a stepper's pull-out torque over the safety factor, a function of the speed [N m]
     forces: list = field(default_factory=list)  # belt forces of the moves, pins and dwells [N]
     pin_values: list = field(default_factory=list)  # pinned torques and forces relative to their limits
     pin_forces: list = field(default_factory=list)
@@ -74,13 +94,18 @@ class DriveModel:
         """The pulley radius and the motor of ``g``'s structure."""
         b, req = g.built, g.request
         drive, choice = req.drive, req.choice
-        lo, hi = drive.radius_bounds()
-        r_ref = float(np.sqrt(lo * hi))
-        rho = b.var("radius", (1, 1), lambda r: pulley_setting(r)[0] / r_ref,
-                    lambda r: pulley_setting(r)[1] / r_ref, lambda r: pulley_setting(r)[2] / r_ref)
-        radius = rho * r_ref
-        inertia = b.param("pulley inertia factor", lambda r: pulley_setting(r)[3]) * drive.pulley_inertia(2 * radius)
-        trans = BeltPulley(2 * radius, inertia)
+        if drive.own_transmission is not None:
+            radius, r_ref = None, 1.0
+            trans = drive.own_transmission
+            inertia = trans.inertia
+        else:
+            lo, hi = drive.radius_bounds()
+            r_ref = float(np.sqrt(lo * hi))
+            rho = b.var("radius", (1, 1), lambda r: pulley_setting(r)[0] / r_ref,
+                        lambda r: pulley_setting(r)[1] / r_ref, lambda r: pulley_setting(r)[2] / r_ref)
+            radius = rho * r_ref
+            inertia = b.param("pulley inertia factor", lambda r: pulley_setting(r)[3]) * drive.pulley_inertia(2 * radius)
+            trans = BeltPulley(2 * radius, inertia)
         pct = drive.limits.peak_limit_pct / 100
         reserve = req.settings.torque_reserve
         if choice.candidates:
@@ -101,6 +126,14 @@ class DriveModel:
             rated_num = max(m.rated_torque for m in cands)
             speed_num = max(m.rated_speed for m in cands)
             motor_name = "any catalogue motor"
+        elif is_stepper(choice.motor):
+            m = choice.motor
+            rotor = b.param("rotor inertia", lambda r: r.choice.motor.rotor_inertia)
+            peak_num, rated_num, speed_num = peak_limit(m, drive, reserve), math.nan, m.pull_out_speed[-1]
+            peak_lim = b.param("peak limit", lambda r: peak_limit(r.choice.motor, r.drive, r.settings.torque_reserve))
+            rated = None  # a stepper has no rated torque: its current (and heat) does not follow the load
+            speed = b.param("rated speed", lambda r: r.choice.motor.pull_out_speed[-1])
+            motor_name = m.name
         else:
             m = choice.motor
             rotor = b.param("rotor inertia", lambda r: r.choice.motor.rotor_inertia)
@@ -110,12 +143,24 @@ class DriveModel:
             speed = b.param("rated speed", lambda r: r.choice.motor.rated_speed)
             motor_name = m.name  # for messages: a relaxed build (which names them) is never reused
         g.radius = radius
-        peak_what = (f"peak_torque (peak torque, {motor_name}: {'%.3g' % peak_num} N m"
-                     f"{', drive limit %g %% of rated' % drive.limits.peak_limit_pct if pct * rated_num * (1 - reserve) < peak_num + 1e-12 and not choice.candidates else ''}"
-                     f"{', %g %% kept in reserve' % (100 * reserve) if reserve else ''})")
+        if rated is None:
+            peak_what = (f"peak_torque (pull-out torque at standstill / safety factor "
+                         f"{drive.limits.pull_out_safety_factor:g}, {motor_name}: {'%.3g' % peak_num} N m"
+                         f"{', %g %% kept in reserve' % (100 * reserve) if reserve else ''})")
+        else:
+            peak_what = (f"peak_torque (peak torque, {motor_name}: {'%.3g' % peak_num} N m"
+                         f"{', drive limit %g %% of rated' % drive.limits.peak_limit_pct if pct * rated_num * (1 - reserve) < peak_num + 1e-12 and not choice.candidates else ''}"
+                         f"{', %g %% kept in reserve' % (100 * reserve) if reserve else ''})")
         period = b.param("period", lambda r: r.period) * g.time_scale
-        return cls(radius, r_ref, inertia, trans, rotor, peak_lim, rated, speed, peak_num, rated_num, speed_num,
-                   motor_name, peak_what, drive.tau_ref, period)
+        out = cls(radius, r_ref, inertia, trans, rotor, peak_lim, rated, speed, peak_num, rated_num, speed_num,
+                  motor_name, peak_what, drive.tau_ref, period)
+        if rated is None:
+            out.pull_out = pull_out_function(choice.motor, drive.limits)
+        return out
+
+    @property
+    def stepper(self) -> bool:
+        return self.pull_out is not None
 
     def move(self, g, k: int) -> None:
         """Torque (relative to ``tau_ref``) and belt force of move ``k``, with its pinned points."""
@@ -126,12 +171,21 @@ class DriveModel:
         # acceleration polynomial (with position and speed at their Greville abscissae), not only at
         # the nodes: the acceleration part is then bounded everywhere in the interval (convex hull),
         # so the optimiser cannot hide a torque peak between two nodes.
-        greville = np.linspace(0.0, 1.0, g.request.mesh.degree + 1)
+        # Through a position-dependent transmission the torque also depends on the speed (1/2 J'(phi) phi'^2):
+        # the speed at the same Greville abscissae (a constant ratio's torque does not read it). The motor
+        # speed at the speed's hull points is the load speed there over mu at the positions of the
+        # velocity polynomial's Greville abscissae (a constant ratio: v / r, bounded everywhere).
+        degree = g.request.mesh.degree
+        greville = np.linspace(0.0, 1.0, degree + 1)
         s = ca.vec(g.si(k, greville, "s")).T
         v = ca.vec(g.vars[k].hull("v") * (mv.stroke / g.T[k])).T  # bounds the speed between nodes too
         a = ca.vec(g.vars[k].hull("a") * (mv.stroke / g.T[k] ** 2)).T
-        terms = load_torque(self.rotor, self.trans, g.load, s, 0 * s, a)
+        v_g = ca.vec(g.si(k, greville, "v")).T
+        terms = load_torque(self.rotor, self.trans, g.load, s, v_g, a)
         tau = terms.total / self.tau_ref
+        self.torque_omega.append(terms.omega)
+        s_v = ca.vec(g.si(k, np.linspace(0.0, 1.0, degree + 2), "s")).T
+        self.omega.append(self.trans.motor_kinematics(s_v, v, 0 * v)[1])
         self.forces.append(terms.load_force)
         # where a load force switches on inside the move the torque jumps: the pinned points (pins.py)
         pin_t, pin_f = pin_rows(g, k, mv, self.rotor, self.trans)

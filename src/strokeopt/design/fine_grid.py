@@ -85,11 +85,14 @@ def fine_cycle(problem, spm: float, moves: list[Move], sols: list[MoveSolution],
 def drive_checks_fine(drive: DriveSetup, motor, teeth: int | None, radius: float, problem, spm, moves, sols,
                        per_interval: int, belt_teeth: int | None = None) -> list:
     """The drive package's checks of the solution, on a fine grid over the whole cycle. A continuous radius
-    has its belt rated as ``belt_teeth`` teeth (None: the fewest of the range)."""
+    has its belt rated as ``belt_teeth`` teeth (None: the fewest of the range); the problem's own
+    transmission (a screw and lever) has no pulley and no belt."""
     from ..drive.checks import drive_checks
 
     switches = switch_positions(drive)
     t, s, v, a = fine_cycle(problem, spm, moves, sols, per_interval, switches)
+    if drive.own_transmission is not None:
+        return drive_checks(motor, drive.own_transmission, drive.load, t, s, v, a, limits=drive.limits)
     if teeth is not None:
         trans = drive.transmission(teeth)
     else:

@@ -98,13 +98,15 @@ class PeakTorque(Limit):
 
     def on_move(self, g, k):
         dm, mv = g.drive_model, g.request.moves[k]
+        if dm.stepper:  # a stepper's peak is its pull-out curve's (PullOut)
+            return
         lim = LimitGroup(f"peak torque move {mv.index}", dm.peak_what, dm.peak_num, "N m",
                          lambda sig, pl=dm.peak_num, tr=dm.tau_ref: pl + sig * tr, mv.index, "peak_torque")
         g.built.limit_abs(lim, g.torques[k] * (dm.tau_ref / dm.peak_lim))
 
     def on_cycle(self, g):
         dm = g.drive_model
-        if g.dwell_torques:
+        if g.dwell_torques and not dm.stepper:
             tau_d = ca.vertcat(*g.dwell_torques)
             lim = LimitGroup("peak torque dwells", dm.peak_what + " holding in the dwells", dm.peak_num, "N m",
                              lambda sig, pl=dm.peak_num, tr=dm.tau_ref: pl + sig * tr, None, "peak_torque")
@@ -112,18 +114,57 @@ class PeakTorque(Limit):
 
 
 class Speed(Limit):
-    """|v| / r within the motor's rated speed."""
+    """|motor speed| within the motor's rated speed (a stepper: the step rate within its pull-out table's last)."""
 
-    checks = ("peak_speed",)
+    checks = ("peak_speed", "step_rate")
 
     def on_move(self, g, k):
         dm, mv = g.drive_model, g.request.moves[k]
-        omega = dm.v[k] / dm.radius
-        rpm = 60 / (2 * math.pi)
-        lim = LimitGroup(f"speed move {mv.index}", f"peak_speed (motor speed, {dm.motor_name}: rated)",
-                         dm.speed_num * rpm, "rpm", lambda sig, sp=dm.speed_num * rpm: sp * (1 + sig), mv.index,
-                         "peak_speed")
-        g.built.limit_abs(lim, omega / dm.speed)
+        if dm.stepper:
+            unit, scale, check = "Hz", 1 / g.request.choice.motor.step_angle, "step_rate"
+            what = f"step_rate (step rate, {dm.motor_name}: the pull-out table's last)"
+        else:
+            unit, scale, check = "rpm", 60 / (2 * math.pi), "peak_speed"
+            what = f"peak_speed (motor speed, {dm.motor_name}: rated)"
+        lim = LimitGroup(f"speed move {mv.index}", what, dm.speed_num * scale, unit,
+                         lambda sig, sp=dm.speed_num * scale: sp * (1 + sig), mv.index, check)
+        g.built.limit_abs(lim, dm.omega[k] / dm.speed)
+
+
+class PullOut(Limit):
+    """A stepper's torque demand under its pull-out curve over the safety factor at the speed of each point
+    where the torque is held (:func:`.drive_model.pull_out_function`). ``[design] enforce_pull_out = false``
+    keeps the rows but not their bound: the design is then solved without it and the check reports by how
+    much the curve is exceeded."""
+
+    checks = ("pull_out_torque",)
+
+    def on_move(self, g, k):
+        dm, mv = g.drive_model, g.request.moves[k]
+        if not dm.stepper:
+            return
+        n = dm.torque_omega[k].shape[1]
+        tau = g.torques[k][:, :n] * dm.tau_ref
+        avail = dm.pull_out(dm.torque_omega[k])
+        sf = g.request.drive.limits.pull_out_safety_factor
+        what = f"pull_out_torque (torque demand under the pull-out curve / safety factor {sf:g}, {dm.motor_name})"
+        # the need: the curve's standstill value plus the largest excess over the curve at any speed
+        lim = LimitGroup(f"pull-out torque move {mv.index}", what, dm.peak_num, "N m",
+                         lambda sig, pl=dm.peak_num, tr=dm.tau_ref: pl + sig * tr, mv.index, "pull_out_torque",
+                         enforced=lambda r: r.settings.enforce_pull_out,
+                         describe=lambda need, pl=dm.peak_num, w=what: (
+                             f"{w}: the demand exceeds the curve by up to {need - pl:.4g} N m "
+                             f"({100 * (need - pl) / pl:.1f} % of the standstill value {pl:.4g} N m)"))
+        g.built.limit(lim, ca.vertcat(ca.vec(tau - avail), ca.vec(-tau - avail)) / dm.tau_ref)
+
+    def on_cycle(self, g):
+        dm = g.drive_model
+        if dm.stepper and g.dwell_torques:  # holding at rest: the curve at standstill
+            tau_d = ca.vertcat(*g.dwell_torques) * (dm.tau_ref / dm.peak_lim)
+            lim = LimitGroup("pull-out torque dwells", dm.peak_what + " holding in the dwells", dm.peak_num, "N m",
+                             lambda sig, pl=dm.peak_num, tr=dm.tau_ref: pl + sig * tr, None, "pull_out_torque",
+                             enforced=lambda r: r.settings.enforce_pull_out)
+            g.built.limit(lim, ca.vertcat(tau_d - 1.0, -tau_d - 1.0) * (dm.peak_num / dm.tau_ref))
 
 
 class RmsTorque(Limit):
@@ -138,6 +179,8 @@ class RmsTorque(Limit):
         from ..drive.load import load_torque
 
         dm, b, mesh, mv = g.drive_model, g.built, g.request.mesh, g.request.moves[k]
+        if dm.rated is None and g.request.objective not in RMS_OBJECTIVES:  # a stepper: not a limit, not asked for
+            return
         x_q, w_q = mesh.quadrature
         sq, vq, aq = (g.si(k, x_q, kind) for kind in ("s", "v", "a"))  # N x len(x_q)
         tq = load_torque(dm.rotor, dm.trans, g.load, sq, vq, aq).total / dm.tau_ref
@@ -150,10 +193,16 @@ class RmsTorque(Limit):
         dm = g.drive_model
         g.move_sq = dm.sum_sq
         g.mean_sq = dm.sum_sq + dm.dwell_sq  # (RMS torque / tau_ref)^2
+        if dm.rated is None:  # a stepper: no rated torque to hold (its current does not follow the load)
+            return
         lim = LimitGroup("RMS torque", f"rms_torque (RMS torque, {dm.motor_name}: rated torque)", dm.rated_num,
                          "N m", lambda sig, r=dm.rated_num, tr=dm.tau_ref: math.sqrt(r**2 + sig * tr**2), None,
                          "rms_torque")
         g.built.limit(lim, g.mean_sq - (dm.rated / dm.tau_ref) ** 2)
+
+
+#: the objectives that read the integral of torque squared (:class:`RmsTorque`)
+RMS_OBJECTIVES = ("min_rms_torque", "min_energy")
 
 
 class BeltTension(Limit):
@@ -183,7 +232,7 @@ class InertiaRatio(Limit):
 
     def on_cycle(self, g):
         dm, req = g.drive_model, g.request
-        if req.choice.candidates:
+        if req.choice.candidates or dm.radius is None:  # nothing to choose: the ratio is checked, not held
             return
         limits = req.drive.limits
         reflected = dm.inertia + req.drive.load.moving_mass * dm.radius**2
@@ -229,9 +278,19 @@ def _largest(signed, bound):
 #: Limits of the kinematics, built with every move.
 MOVE_LIMITS = (JerkBound(),)
 #: Limits of the drive, built with a [drive] section, in this order.
-DRIVE_LIMITS = (PeakTorque(), Speed(), RmsTorque(), BeltTension(), InertiaRatio(), HandoverAccuracy())
+DRIVE_LIMITS = (PeakTorque(), Speed(), PullOut(), RmsTorque(), BeltTension(), InertiaRatio(), HandoverAccuracy())
 #: the drive package's checks the design holds: a fine-grid violation of one of them refines the mesh.
 ENFORCED_CHECKS = frozenset(c for lim in DRIVE_LIMITS for c in lim.checks)
+#: a stepper's checks of its pull-out curve (its peak torque is the curve's at standstill)
+PULL_OUT_CHECKS = frozenset(("pull_out_torque", "peak_torque"))
+
+
+def enforced_checks(settings, stepper: bool) -> frozenset:
+    """The checks a design with ``settings`` holds (:data:`ENFORCED_CHECKS`; on a ``stepper`` without its pull-out
+    curve when ``[design] enforce_pull_out = false``: those are reported, a violation does not refine the mesh)."""
+    if settings.enforce_pull_out or not stepper:
+        return ENFORCED_CHECKS
+    return ENFORCED_CHECKS - PULL_OUT_CHECKS
 
 
 def build_drive(g) -> None:

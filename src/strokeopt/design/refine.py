@@ -23,7 +23,7 @@ from .collocation import Mesh
 from .diagnose import diagnose
 from .fine_grid import drive_checks_fine, fine_grid_report
 from .free import free_values
-from .limits import ENFORCED_CHECKS
+from .limits import enforced_checks
 from .nlp import Nlp, prepare
 from .objectives import TIME_SCALE, free_time
 from .pins import pin_intervals, pin_times, pins_fit
@@ -216,14 +216,14 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
             drive = copy(drive)
             drive.load = with_model_springs(drive.load, found)
         if drive is not None:
-            radius = float(nlp.value(nlp.graph.radius, x).item())
+            radius = None if nlp.graph.radius is None else float(nlp.value(nlp.graph.radius, x).item())
             motor = choice.motor
             if choice.candidates:
                 pick = nlp.value(nlp.graph.pick, x).ravel()
                 motor = choice.candidates[int(np.argmax(pick))]
             checks = drive_checks_fine(drive, motor, choice.teeth, radius, req.problem, rated.spm, rated.moves,
                                        sols, settings.check_points, choice.belt_teeth)
-            over = [max(0.0, -c.margin) for c in checks if c.name in ENFORCED_CHECKS and math.isfinite(c.margin)]
+            over = [max(0.0, -c.margin) for c in checks if c.name in enforced_checks(settings, drive.stepper) and math.isfinite(c.margin)]
             if req.objective == "min_peak_torque":  # the epigraph held at the nodes; the fine grid reads the peak
                 nlp_peak = nlp.graph.transform(objective_value(nlp, sol, x), nlp.request)
                 fine_peak = next(c.value for c in checks if c.name == "peak_torque")

@@ -137,8 +137,21 @@ class DriveSetup:
         self.teeth_range = (zmin, zmax)
         if zmax < zmin:
             raise ProblemError(self.file, "design.pulley_teeth_max", f"{zmax} is below pulley_teeth_min {zmin}")
-        #: torque scale of the NLP [N m]: the largest peak torque in the catalogue
-        self.tau_ref = max([m.peak_torque for m in self.catalogue.motors.values()] or [1.0])
+        #: the problem's own transmission when it is not a belt pulley (a screw and lever): nothing to
+        #: choose, no belt; None for a belt pulley (its radius is the design's to choose)
+        self.own_transmission = None if isinstance(problem.transmission, BeltPulley) else problem.transmission
+        if self.own_transmission is not None and settings.pulley != "fixed":
+            raise ProblemError(self.file, "design.pulley", f"{settings.pulley!r} chooses a belt pulley; the "
+                                                           f"transmission is a {problem.transmission.name} (use \"fixed\")")
+        self.stepper = spec.motor is not None and spec.motor in self.catalogue.steppers
+        if self.stepper and settings.motor_choice == "bonmin":
+            raise ProblemError(self.file, "design.motor_choice", "bonmin mixes servo motors' limits; a stepper's "
+                                                                 "pull-out curve is not a number to mix: use \"fixed\" "
+                                                                 "or \"enumerate\"")
+        #: torque scale of the NLP [N m]: the largest peak torque in the catalogue (a stepper: the largest
+        #: holding torque of the steppers), the same for every motor, so one solver serves them all
+        self.tau_ref = max([m.holding_torque for m in self.catalogue.steppers.values()] if self.stepper else
+                           [m.peak_torque for m in self.catalogue.motors.values()] or [1.0])
 
     def pulley(self, teeth: int):
         found = self.catalogue.pulleys_of(self.profile, teeth, teeth)
@@ -157,13 +170,14 @@ class DriveSetup:
         return self.catalogue.pulley_inertia(self.profile, pitch_diameter)
 
     def motors(self) -> list:
-        return list(self.catalogue.motors.values())
+        """The motors a catalogue search tries: the steppers when the file's motor is one, else the servo motors."""
+        return list((self.catalogue.steppers if self.stepper else self.catalogue.motors).values())
 
     def fixed_motor(self):
         if self.spec.motor is None:
             raise ProblemError(self.file, "drive.motor", "is needed with design.motor_choice = \"fixed\" "
                                                          "(or choose: motor_choice = \"enumerate\" or \"bonmin\")")
-        return self.catalogue.motor(self.spec.motor, (self.file, "drive.motor"))
+        return self.catalogue.actuator(self.spec.motor, (self.file, "drive.motor"))
 
     def radius_bounds(self) -> tuple[float, float]:
         from ..drive.transmission import pitch_diameter

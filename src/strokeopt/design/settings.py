@@ -74,6 +74,9 @@ class DesignSettings:
     #: ``[design.free.<element>]``: (element, lower, upper stiffness [N/m]) of the model parameters that are
     #: design variables (design/free.py checks the names)
     free: tuple = ()
+    #: a stepper's pull-out curve held (True) or only reported (False: the check table says by how much the
+    #: design exceeds it, status "limits exceeded"), for a move the motor cannot make, to see it anyway
+    enforce_pull_out: bool = True
     torque_reserve: float = 0.0
 
     @property
@@ -128,9 +131,11 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
             raise solver.error(*problem)
     contact = parse_contact(f.table("contact", required=False))
     free = parse_free(f.table("free", required=False))
+    pull_out = f.boolean("enforce_pull_out", True)
     f.finish()
     return DesignSettings(objective, n, d, rest, jerk, from_law, accuracy, motor_choice, pulley, zmin, zmax,
-                          check_points, check_tol, refinements, pulley_inertia, options, contact, free, reserve)
+                          check_points, check_tol, refinements, pulley_inertia, options, contact, free, pull_out,
+                          reserve)
 
 
 def parse_free(f) -> tuple:

@@ -39,7 +39,7 @@ from .collocation import Mesh
 from .contact_limits import CONTACT_LIMITS
 from .fine_grid import move_results
 from .free import free_overrides, free_report
-from .limits import DRIVE_LIMITS, MOVE_LIMITS
+from .limits import DRIVE_LIMITS, ENFORCED_CHECKS, MOVE_LIMITS, enforced_checks
 from .nlp import prepare
 from .objectives import OBJECTIVES, TORQUE_OBJECTIVES, free_time, needs_drive_error, unknown_objective_error
 from .parts import choose_parts
@@ -75,11 +75,6 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     spm = float(spm if spm is not None else problem.spm)
     if not (math.isfinite(spm) and spm > 0):
         raise ProblemError("--spm", "", f"must be positive, got {spm!r}")
-    if not hasattr(problem.transmission, "radius"):
-        raise ProblemError(str(problem.file), "transmission.type",
-                           f"strokeopt solve designs moves through a belt pulley; a {problem.transmission.name} "
-                           "(its position function, a stepper's pull-out curve) is not yet in the design: "
-                           "kinematics, size and simulate take it")
     terms = tuple(getattr(problem, "error_terms", ()) if error_terms is None else error_terms)
     mesh = mesh or settings.mesh
     warm = warm_start.solutions if isinstance(warm_start, Design) else warm_start
@@ -100,10 +95,11 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     else:
         best, teeth, notes = choose_parts(req, progress)
         # the handover accuracy terms at the chosen design (lazy: re-solved with them only if violated)
-        choice = DriveChoice(best.motor, teeth, None if teeth else drive.radius_bounds())
+        own = drive.own_transmission is not None
+        choice = DriveChoice(best.motor, teeth, None if teeth or own else drive.radius_bounds())
         best = _with_terms(replace(req, choice=choice, spm=best.nlp.request.spm), best)
         motor = best.motor
-        pd = 2 * best.radius
+        pd = None if best.radius is None else 2 * best.radius
     wall = time.perf_counter() - t_start
     spm = best.nlp.request.spm  # the request's, or the highest rate of min_time
     free = free_report(settings, problem.model, best.free_values) if best.free_values else []
@@ -131,6 +127,14 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     if handover_check is not None and any(c["name"].startswith(HANDOVER_CHECK) for c in design.checks):
         design.checks = _verified_handover(design, *handover_check(design), settings.check_tolerance)
     failed = [c for c in design.checks if not c["ok"] and "design_term" not in c]
+    held = enforced_checks(settings, drive is not None and drive.stepper)
+    relaxed = [c for c in failed if c["name"] in ENFORCED_CHECKS - held]
+    failed = [c for c in failed if c not in relaxed]
+    if relaxed:  # the stepper's pull-out curve not held ([design] enforce_pull_out = false): said, not hidden
+        design.status = "limits exceeded"
+        design.notes.insert(0, "limits exceeded, not enforced ([design] enforce_pull_out = false): " + "; ".join(
+            f"{c['name']} {format_value(c['value'])} {c['unit']} > limit {format_value(c['limit'])} {c['unit']} "
+            f"({-100 * c['margin']:.1f} % over)" for c in relaxed) + ": the motor cannot make this move")
     if failed:  # beyond check_tolerance after every refinement: not a design to build
         design.status = "limits exceeded"
         design.notes.insert(0, "limits exceeded between collocation nodes: " + "; ".join(

@@ -100,13 +100,26 @@ def torque_limit(motor, limits: DriveLimits) -> float:
     """The torque limit of ``motor`` on its drive [N m]: ``min(motor peak, drive peak limit x rated)``.
 
     The one limit every command checks a peak torque against (the ``peak_torque`` check, the
-    design's torque bound, the servo model's saturation).
+    design's torque bound, the servo model's saturation). A stepper's is its pull-out torque at
+    standstill over the safety factor (:attr:`DriveLimits.pull_out_safety_factor`): the most its
+    pull-out curve allows at any speed.
     """
+    if is_stepper(motor):
+        return float(motor.pull_out(0.0)) / limits.pull_out_safety_factor
     return min(motor.peak_torque, limits.peak_limit_pct / 100 * motor.rated_torque)
+
+
+def is_stepper(motor) -> bool:
+    """Whether ``motor`` is a stepper (:class:`~strokeopt.drive.catalogue.StepperMotor`): its limits are its
+    pull-out curve and step rate, not a servo's peak, rated torque and rated speed."""
+    return getattr(motor, "kind", "servo") == "stepper"
 
 
 def torque_limit_text(motor, limits: DriveLimits) -> str:
     """How :func:`torque_limit` is made, for a report: ``min(motor peak 5.5 N m, 300 % x rated 1.2 N m)``."""
+    if is_stepper(motor):
+        return (f"pull-out torque at standstill {float(motor.pull_out(0.0)):g} N m / safety factor "
+                f"{limits.pull_out_safety_factor:g}")
     return (f"min(motor peak {motor.peak_torque:g} N m, drive peak limit {limits.peak_limit_pct:g} % x rated "
             f"{motor.rated_torque:g} N m)")
 
@@ -168,11 +181,16 @@ def drive_checks(motor, transmission, load: Load, t, s, v, a, *, limits: DriveLi
     and the drive's peak limit x rated torque), overload (peak / rated) vs the drive's peak limit, RMS torque vs rated torque, peak speed vs rated speed,
     load-to-rotor inertia ratio, and with ``belt`` the belt width and
     breaking checks of thesis appendix 2 (``grooves`` of the smaller pulley).
+    A stepper's checks are its peak torque against :func:`torque_limit` and :func:`stepper_checks`.
     """
     t, s, v, a = (np.asarray(x, dtype=float) for x in (t, s, v, a))
     terms = load_torque(motor, transmission, load, s, v, a)
     peak, rms, peak_speed, peak_force = cycle_values(terms.total, terms.omega, terms.load_force, t)
     reflected = reflected_inertia(transmission, load, terms.phi)
+    limits = limits or DriveLimits()
+    if is_stepper(motor):
+        return ([Check("peak_torque", float(peak), torque_limit(motor, limits), "N m")]
+                + stepper_checks(terms.total, terms.omega, motor, reflected, limits))
     return build_checks(peak, rms, peak_speed, peak_force, motor, reflected, limits or DriveLimits(), belt, grooves)
 
 

@@ -75,12 +75,23 @@ class CamTableSpec:
 CAM_COLUMNS = [("position_mm", "mm", "bar position (problem frame, + up)"),
                ("velocity_m_s", "m/s", "bar velocity"), ("acceleration_m_s2", "m/s^2", "bar acceleration"),
                ("jerk_m_s3", "m/s^3", "bar jerk"),
-               ("motor_angle_deg", "deg", "motor angle = position / pulley pitch radius (0 at 0 mm)"),
+               ("motor_angle_deg", "deg", "motor angle = position / pulley pitch radius, or through the problem's "
+                                          "transmission (0 at 0 mm)"),
                ("motor_speed_rpm", "rpm", "motor speed"),
                ("motor_torque_N_m", "N m", "motor torque on the design's motor and pulley (rigid load model)")]
 _CAM_FORMATS = {"cam_angle_deg": "%.4f", "master_counts": "%.0f", "position_mm": "%.6f", "velocity_m_s": "%.6f",
                 "acceleration_m_s2": "%.4f", "jerk_m_s3": "%.2f", "motor_angle_deg": "%.5f",
                 "motor_speed_rpm": "%.3f", "motor_torque_N_m": "%.5f"}
+
+
+def design_transmission(design):
+    """The transmission a design's motor angle is read through: its pulley (radius), else the problem's own
+    (a belt pulley of the problem's radius, or a screw and lever: no pulley to choose)."""
+    from ..drive.transmission import BeltPulley
+
+    if design.radius:
+        return BeltPulley(2 * design.radius)
+    return design.problem.transmission
 
 
 def cam_table(design, resolution_deg: float = 0.1, spec: CamTableSpec | None = None) -> dict[str, np.ndarray]:
@@ -98,11 +109,11 @@ def cam_table(design, resolution_deg: float = 0.1, spec: CamTableSpec | None = N
     angle = np.arange(n) * (360.0 / n)
     t = angle / 360.0 * design.stroke.period
     k = design.stroke.evaluate(t)
-    r = design.radius if design.radius else design.problem.transmission.radius
+    phi, omega, _ = design_transmission(design).motor_kinematics(k.s, k.v, k.a)
     master = angle if spec.master_unit == "deg" else np.arange(n) * (spec.master_counts / n)
     out = {spec.master_column: master, "position_mm": k.s * 1e3, "velocity_m_s": k.v,
-           "acceleration_m_s2": k.a, "jerk_m_s3": k.j, "motor_angle_deg": np.degrees(k.s / r),
-           "motor_speed_rpm": k.v / r * 60.0 / (2 * np.pi)}
+           "acceleration_m_s2": k.a, "jerk_m_s3": k.j, "motor_angle_deg": np.degrees(phi),
+           "motor_speed_rpm": omega * 60.0 / (2 * np.pi)}
     torque = design_torque(design, t=t)
     if torque is not None:
         out["motor_torque_N_m"] = torque[1].total
@@ -116,14 +127,18 @@ def cam_table_header(design, spec: CamTableSpec) -> list[str]:
     """The lines that state what a cam table is: problem, cycle, master axis, motor, pulley, units."""
     stitch = 60.0 / design.spm
     cycle = design.stroke.period
-    pulley = (f"{design.pulley_teeth}-tooth pulley" if design.pulley_teeth else "continuous pulley radius")
-    pd = 2 * (design.radius if design.radius else design.problem.transmission.radius) * 1e3
+    trans = design_transmission(design)
+    if hasattr(trans, "radius"):
+        pulley = (f"{design.pulley_teeth}-tooth pulley" if design.pulley_teeth else "continuous pulley radius")
+        pulley += f", pitch diameter {2 * trans.radius * 1e3:.4f} mm"
+    else:
+        pulley = f"none, the problem's {trans.name}"
     master = (f"cam angle [deg], 0-360 per cam cycle" if spec.master_unit == "deg"
               else f"master counts, {spec.master_counts} per cam cycle")
     return [f"strokeopt cam table: {design.problem.name}, {design.objective} design at {design.spm:g} spm",
             f"cycle: one cam cycle = {cycle * 1e3:.4f} ms = {cycle / stitch:g} stitches of {stitch * 1e3:.4f} ms",
             f"master: {master}; {spec.points} points, one every {spec.resolution_deg:g} deg",
-            f"motor: {design.motor or '(none)'}; pulley: {pulley}, pitch diameter {pd:.4f} mm"]
+            f"motor: {design.motor or '(none)'}; pulley: {pulley}"]
 
 
 def design_json(design, resolution_deg: float = 0.1, spec: CamTableSpec | None = None,

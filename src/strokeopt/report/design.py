@@ -57,8 +57,7 @@ def plot_design(design: Design, law_stroke=None, path=None):
     draw_kinematics(axes, design.problem, strokes, design.spm)
     axes[0].set_title(f"{' vs '.join(s.label for s in strokes)}; {period_text(design.stroke.period, design.spm)}",
                       fontsize=9)
-    pulley = f"{design.pulley_teeth} teeth" if design.pulley_teeth else "continuous pulley radius"
-    what = f"{design.objective}" + (f", motor {design.motor}, {pulley}" if design.motor else "")
+    what = f"{design.objective}" + (f", motor {design.motor}, pulley {_pulley_text(design)}" if design.motor else "")
     fig.suptitle(f"{design.problem.name}: optimal stroke ({what}) at {design.spm:g} spm", fontsize=11)
     if path_torque:
         t, terms = path_torque
@@ -103,6 +102,8 @@ def feasible_text(row: dict) -> str:
 
 
 def _pulley_text(design: Design) -> str:
+    if design.pitch_diameter is None:  # the problem's own transmission (a screw and lever): nothing chosen
+        return f"none: the problem's {design.problem.transmission.name}"
     return (f"{design.pulley_teeth} teeth" if design.pulley_teeth is not None
             else "continuous radius (design.pulley = \"continuous\": no catalogue tooth count)")
 
@@ -114,8 +115,8 @@ def design_text(design: Design, comparison: list[dict] | None = None) -> str:
              f"solved in {design.solve_time_s:.2f} s, mesh {design.mesh.intervals} x degree {design.mesh.degree})",
              f"objective {design.objective}: {format_value(design.objective_value)} {design.objective_unit}"]
     if design.motor is not None:
-        lines.append(f"motor {design.motor}; pulley {_pulley_text(design)}, pitch diameter "
-                     f"{design.pitch_diameter * 1e3:.2f} mm")
+        lines.append(f"motor {design.motor}; pulley {_pulley_text(design)}" + (
+            "" if design.pitch_diameter is None else f", pitch diameter {design.pitch_diameter * 1e3:.2f} mm"))
     lines.append("")
     lines.append(format_table([{**m.to_dict(), "duration_ms": m.duration * 1e3} for m in design.moves],
                               [("index", "move"), ("name", "interval"), ("stroke_mm", "stroke mm"),
@@ -144,7 +145,10 @@ def design_text(design: Design, comparison: list[dict] | None = None) -> str:
     if comparison:
         cols = [("law", "stroke"), ("a_max_m_s2", "a_max m/s2"), ("jerk_max_m_s3", "jerk_max m/s3")]
         if "peak_torque_N_m" in comparison[0]:
-            cols += [("peak_torque_N_m", "peak torque N m"), ("rms_torque_N_m", "RMS torque N m")]
+            cols += [(key, head) for key, head in (("peak_torque_N_m", "peak torque N m"),
+                                                   ("rms_torque_N_m", "RMS torque N m"),
+                                                   ("pull_out_pct", "pull-out %"), ("step_rate_Hz", "step rate Hz"))
+                     if key in comparison[0]]
         cols.append(("vs_optimal_pct", f"{design.objective} vs optimal %"))
         cols.append(("feasible_text", "feasible"))
         lines.append("")

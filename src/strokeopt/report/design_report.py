@@ -122,7 +122,9 @@ def plot_stroke(problem, design, law_stroke):
 
     fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 8.5), constrained_layout=True)
     draw_kinematics(list(axes), problem, [design.stroke, law_stroke], design.spm, n=1441)
-    r = design.radius if design.radius else problem.transmission.radius
+    # the motor over the bar: the pulley radius, or a transmission's ratio mu at 0 mm (a screw and lever's
+    # changes by less than 0.1 % over a stitch-cam step: the axis is that ratio's)
+    r = design.radius if design.radius else float(np.ravel(problem.transmission.transfer(np.zeros(1))[1])[0])
     jerk_scale = 1e-3 if axes[3].get_ylabel().startswith("bar jerk [km") else 1.0
     for ax, (label, f) in zip(axes, [("motor angle [deg]", 1e-3 / r * 180 / math.pi),
                                      ("motor speed [rpm]", 60 / (2 * math.pi) / r),

@@ -104,7 +104,10 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
 def draw_torque_speed(ax, motor, omega, torque, t, limits, title: str) -> None:
     """The cycle's torque-speed path (``omega`` [rad/s], ``torque`` [N m] over times ``t``) with its
     peak and RMS operating points, over the motor's peak and rated (continuous) curves and the
-    torque limit every check uses (:func:`~strokeopt.drive.checks.torque_limit` of ``limits``)."""
+    torque limit every check uses (:func:`~strokeopt.drive.checks.torque_limit` of ``limits``); a stepper's
+    picture is its demand over its pull-out curve (:func:`draw_pull_out`)."""
+    if getattr(motor, "kind", "servo") == "stepper":
+        return draw_pull_out(ax, motor, omega, torque, limits, title)
     rpm = 60 / (2 * math.pi)
     m = motor
     w = np.linspace(-m.rated_speed, m.rated_speed, 101)
