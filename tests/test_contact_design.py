@@ -303,3 +303,36 @@ def test_the_shipped_contact_design_file_is_the_reference_plus_its_contact_secti
     assert p.model == reference.model and p.timing == reference.timing
     ours, theirs = p.drive.load.forces[0], reference.drive.load.forces[0]
     assert ours.spring == "k2" and ours.force == pytest.approx(theirs.force) and ours.stiffness == theirs.stiffness
+
+
+# --------------------------------------------------------------------------- one answer with a free spring
+
+
+@pytest.mark.slow  # a solve with k2 free, and the full servo simulation of its design.json
+def test_free_spring_design_has_one_handover_error_everywhere(write_problem, capsys, tmp_path):
+    # before: with k2 free (it ends at 3000 N/m) the solve's check table simulated the file's 900 N/m
+    # and printed 0.0721 mm, `accuracy --design` 0.1383 mm for the same design.json
+    import json
+
+    _, path = free_problem(write_problem, 'keep_closed = ["c21"]\nimpact_velocity_max_m_s = 2.0')
+    out = tmp_path / "out"
+    assert main(["solve", str(path), "--spm", "600", "--out", str(out), "--json", "--plot", "none"]) == 0
+    solved = json.loads(capsys.readouterr().out)
+    row = next(c for c in solved["checks"] if c["name"].startswith("handover accuracy"))
+    assert main(["accuracy", str(path), "--design", str(out / "design.json"), "--json", "--plot", "none"]) in (0, 1)
+    acc = json.loads(capsys.readouterr().out)
+    assert row["value"] == pytest.approx(acc["handover_error_mm"], rel=1e-9)
+
+
+def test_verify_names_what_it_did_not_judge_and_refuses_a_problem_file(capsys, reference, reference_path):
+    # before: "verified ... within limits" over a lag of 1.7 mm that no limit judged (no [design.contact]);
+    # now the verdict names it with its value. And a problem file where a design file belongs says so.
+    from strokeopt.contact.verify import verification
+
+    block = verification(simulate_scene(reference, "release"))
+    lag = next(r for r in block["criteria"] if r["criterion"] == "lag")
+    assert block["status"] == "ok" and lag["ok"] is None and lag["value"] > 0.1  # mm: the modified sine lags
+    assert "not judged" in block["verdict"] and f"lag {lag['value']:.4g} mm" in block["verdict"]
+    assert main(["verify", str(reference_path)]) == 2
+    err = capsys.readouterr().err
+    assert "is a problem file" in err and "--out DIR" in err

@@ -20,7 +20,8 @@ def _servo_handover_check(problem):
         from ..servo.accuracy import stroke_accuracy
 
         radius = None if design.pulley_teeth is not None else design.radius
-        result = stroke_accuracy(problem, design.stroke, design.spm, motor=design.motor_spec,
+        # the design's problem: the file's with the values of free model parameters ([design.free]) found
+        result = stroke_accuracy(design.problem, design.stroke, design.spm, motor=design.motor_spec,
                                  pulley_teeth=design.pulley_teeth, radius=radius)
         return result.handover_error, "full servo simulation"
 

@@ -105,8 +105,13 @@ def verification(result: SceneResult, lag_max: float | None = None, impact_veloc
                               f" {r['value']:.4g} {r['unit']} > limit {r['limit']:.4g} {r['unit']}") for r in failed)
     else:
         judged = [r["criterion"] for r in rows if r["ok"]]
+        # a criterion without a limit is named with its value, so that "verified" never hides it
+        unjudged = [r for r in rows if r["ok"] is None and r["criterion"] not in {c for c, _, _ in reported}
+                    and isinstance(r["value"], (int, float)) and not isinstance(r["value"], bool)]
         verdict = (f"verified in scene {result.scene!r} at {result.spm:g} spm: " +
                    (", ".join(judged) + " within limits" if judged else "no criterion to judge") +
+                   ("; not judged (no limit: [design.contact]): " + ", ".join(
+                       f"{r['criterion']} {r['value']:.4g} {r['unit']}" for r in unjudged) if unjudged else "") +
                    ("; " + ", ".join(f"{c} {v:.4g} {u}" for c, v, u in reported) + " (reported)" if reported else ""))
     return {"scene": result.scene, "spm": result.spm, "status": "verification failed" if failed else "ok",
             "criteria": rows, "failed": [r["criterion"] for r in failed], "verdict": verdict}

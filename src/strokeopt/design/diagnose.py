@@ -47,7 +47,9 @@ def diagnose(req: SolveRequest, status: str) -> SolverError:
     violated.sort(key=lambda v: -v[0])
     excess, lim, need = violated[0]
     subject = f"move {lim.move} too short" if lim.move is not None else "the design cannot meet the limits"
-    motor = f" for motor {choice.motor.name}" if choice is not None and choice.motor is not None else ""
+    # a limit with its own message (the contact model's) is not the motor's: the motor is not named
+    motor = (f" for motor {choice.motor.name}" if choice is not None and choice.motor is not None
+             and lim.describe is None else "")
     lines = [f"{subject}{motor} at {spm:g} spm: {need_text(lim, need, lim.what)}"]
     seen = {lim.name}
     for _, other, other_need in violated[1:]:

@@ -295,6 +295,9 @@ def read_design(path: str | Path) -> tuple[dict, StrokeFunction]:
     except FileNotFoundError:
         raise ProblemError(str(path), "", "no such file") from None
     except (OSError, ValueError) as exc:
+        if path.suffix.lower() == ".toml":
+            raise ProblemError(str(path), "", "is a problem file; a design file is the design.json that "
+                                              "'strokeopt solve PROBLEM --out DIR' writes (DIR/design.json)") from None
         raise ProblemError(str(path), "", f"is not a readable design file: {exc}") from None
     if not isinstance(data, dict) or data.get("format") != "strokeopt-design":
         raise ProblemError(str(path), "format", "is not a strokeopt design file (format != 'strokeopt-design')")

@@ -68,7 +68,8 @@ def gather(problem, design, summary: dict, scenes=None, options=None, source: st
         from ..servo.accuracy import stroke_accuracy
 
         radius = None if design.pulley_teeth is not None else design.radius
-        accuracy = stroke_accuracy(problem, design.stroke, design.spm, motor=design.motor_spec,
+        # the design's own problem: with the values of free model parameters found, as the solve checks it
+        accuracy = stroke_accuracy(design.problem, design.stroke, design.spm, motor=design.motor_spec,
                                    pulley_teeth=design.pulley_teeth, radius=radius)
     names = list(problem.scenes or {})
     if scenes is None:
@@ -274,7 +275,9 @@ def section_accuracy(d: ReportData) -> str:
         out += h.para(f"Requirement {limit:g} mm: " + ("met" if a["handover_error_mm"] <= limit else "NOT met")
                       + f" (full servo simulation: sampled position table, worst of its phases). Belt mode "
                       f"{a['belt_resonance_Hz']:.0f} Hz; residual belt vibration in the dwell "
-                      f"{a['residual_vibration_mm']:.4f} mm; peak torque command {a['peak_torque_command_N_m']:.3f} N m.")
+                      f"{a['residual_vibration_mm']:.4f} mm; peak torque command {a['peak_torque_command_N_m']:.3f} N m"
+                      + (f", ABOVE the torque limit {a['torque_limit_N_m']:.3f} N m: the drive saturates and the "
+                         "prediction does not hold." if a["torque_limited"] else "."))
     out += h.svg_figure(plot_accuracy(d.accuracy, None, d.design.motor),
                         "Commanded and actual bar position, and the error with its servo and belt parts over the "
                         "cycle; the handover window shaded.")
