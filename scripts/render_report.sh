@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Make docs/report-example.pdf and docs/report-example.png (its first page) from the reference design:
 # `strokeopt solve --out` writes the design report, headless Chromium (Debian: apt-get install chromium)
-# prints it to PDF and takes a screenshot of its first page.
+# prints it to PDF, and its first page becomes the PNG (pdftoppm, Debian: poppler-utils).
 #   scripts/render_report.sh                      # python3 and chromium from PATH
 #   PYTHON=/path/to/python CHROMIUM=/usr/bin/chromium scripts/render_report.sh
 set -euo pipefail
@@ -18,8 +18,13 @@ flags=(--headless --no-sandbox --disable-gpu --disable-quic --no-first-run --dis
 url="file://$work/out/report.html"
 "$CHROMIUM" "${flags[@]}" --no-pdf-header-footer --print-to-pdf="$PWD/docs/report-example.pdf" "$url" 2>"$work/pdf.log" \
     || { cat "$work/pdf.log" >&2; exit 1; }
-# the first A4 page at 96 dpi (794 x 1123 px) at twice the pixel density
-"$CHROMIUM" "${flags[@]}" --window-size=794,1123 --force-device-scale-factor=1.5 --hide-scrollbars \
-    --screenshot="$PWD/docs/report-example.png" "$url" 2>"$work/png.log" || { cat "$work/png.log" >&2; exit 1; }
+# the first printed page (print CSS, as the PDF has it): poppler's pdftoppm (Debian: poppler-utils);
+# without it, a screenshot of the first A4 screen (screen CSS)
+if command -v pdftoppm >/dev/null; then
+    pdftoppm -png -r 110 -f 1 -l 1 -singlefile docs/report-example.pdf docs/report-example
+else
+    "$CHROMIUM" "${flags[@]}" --window-size=794,1123 --force-device-scale-factor=1.5 --hide-scrollbars \
+        --screenshot="$PWD/docs/report-example.png" "$url" 2>"$work/png.log" || { cat "$work/png.log" >&2; exit 1; }
+fi
 cp "$work/out/report.html" docs/report-example.html
 ls -l docs/report-example.pdf docs/report-example.png docs/report-example.html

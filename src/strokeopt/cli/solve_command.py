@@ -204,7 +204,7 @@ def _impact_study(args, problem, progress) -> int:
         _emit(to_json(report))
     else:
         print(impact_study_text(report))
-    _write_figure(lambda p: plot_impact_study(rows, p, objective),
+    _write_figure(lambda p: plot_impact_study(rows, p, objective, f"{problem.name}, {problem.spm:g} spm"),
                   _plot_path(args, "solve_impact", spm_tag(problem.spm), objective), args)
     if not good:
         print("strokeopt: infeasible: no impact-velocity limit of the study gives a verified design", file=sys.stderr)

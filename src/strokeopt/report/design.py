@@ -221,8 +221,14 @@ def impact_study_text(report: dict) -> str:
     return format_table(table, cols, title=title)
 
 
-def plot_impact_study(rows: list[dict], path=None, objective: str | None = None):
-    """What quietness costs: the objective over the impact-velocity limit; the simulated impact velocity beside it."""
+#: What an objective's value is, for an axis label.
+OBJECTIVE_QUANTITY = {"min_peak_torque": "peak motor torque", "min_rms_torque": "RMS motor torque",
+                      "min_time": "stitch period", "min_stiffness": "spring stiffness"}
+
+
+def plot_impact_study(rows: list[dict], path=None, objective: str | None = None, title: str = ""):
+    """What quietness costs: the objective over the impact-velocity limit; the simulated impact velocity beside it.
+    ``title``: the figure's title (problem and stitch rate)."""
     import matplotlib.pyplot as plt  # here: text reports do not import matplotlib
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
@@ -238,7 +244,10 @@ def plot_impact_study(rows: list[dict], path=None, objective: str | None = None)
         if not r["feasible"]:
             axes[0].axvline(r["impact_velocity_max_m_s"], color="0.7", ls=":")
     unit = ok[0].get("objective_unit", "") if ok else ""
-    axes[0].set_ylabel(f"{objective or 'objective'} [{unit}]")
+    quantity = OBJECTIVE_QUANTITY.get(objective or "", "objective value")
+    axes[0].set_ylabel(f"{quantity} [{unit}]" + (f" ({objective})" if objective else ""))
+    if title:
+        fig.suptitle(title)
     axes[0].set_title("what quietness costs (dotted: infeasible limits)")
     sim = [r for r in ok if r.get("simulated_impact_velocity_m_s") is not None]
     axes[1].plot([r["impact_velocity_max_m_s"] for r in sim], [r["simulated_impact_velocity_m_s"] for r in sim], "o",

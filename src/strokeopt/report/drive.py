@@ -125,7 +125,7 @@ def draw_torque_speed(ax, motor, omega, torque, t, limits, title: str) -> None:
     ax.plot(omega * rpm, torque, color="tab:blue", lw=1.2, label="cycle")
     i = int(np.argmax(np.abs(torque)))
     ax.plot(omega[i] * rpm, torque[i], "o", color="tab:blue", ms=7,
-            label=f"peak {abs(torque[i]):.3f} N m at {abs(omega[i]) * rpm:.0f} rpm")
+            label=f"peak {torque[i]:.3f} N m at {omega[i] * rpm:.0f} rpm")
     # the RMS torque of the sizing check; the RMS speed by the same rule
     (_, rms_torque), (_, rms_speed) = (cycle_values(y, omega, omega, t)[:2] for y in (torque, omega))
     ax.plot(rms_speed * rpm, rms_torque, "D", color="tab:purple", ms=7,
@@ -134,7 +134,8 @@ def draw_torque_speed(ax, motor, omega, torque, t, limits, title: str) -> None:
     ax.set_ylabel("motor torque [N m]")
     ax.set_title(title)
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7, loc="best")
+    # below the axes: inside, the legend lies on the curves it names
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, frameon=False)
 
 
 def torque_angle_axis(ax, title: str, fontsize: int = 8) -> None:
