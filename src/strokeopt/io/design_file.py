@@ -133,7 +133,7 @@ def cam_table_header(design, spec: CamTableSpec) -> list[str]:
         pulley += f", pitch diameter {2 * trans.radius * 1e3:.4f} mm"
     else:
         pulley = f"none, the problem's {trans.name}"
-    master = (f"cam angle [deg], 0-360 per cam cycle" if spec.master_unit == "deg"
+    master = ("cam angle [deg], 0-360 per cam cycle" if spec.master_unit == "deg"
               else f"master counts, {spec.master_counts} per cam cycle")
     return [f"strokeopt cam table: {design.problem.name}, {design.objective} design at {design.spm:g} spm",
             f"cycle: one cam cycle = {cycle * 1e3:.4f} ms = {cycle / stitch:g} stitches of {stitch * 1e3:.4f} ms",
