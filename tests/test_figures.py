@@ -64,8 +64,10 @@ def test_design_figure_has_the_torque_speed_panel(reference):
     panel = [ax for ax in fig.axes if ax.get_xlabel() == "motor speed [rpm]"]
     assert len(panel) == 1
     labels = panel[0].get_legend_handles_labels()[1]
-    for wanted in ("motor peak", "motor rated", "torque limit 3.60 N m", "cycle", "peak 0.860 N m", "RMS"):
+    for wanted in ("motor peak", "motor rated", "torque limit 3.60 N m", "cycle", "RMS"):
         assert any(label.startswith(wanted) for label in labels), (wanted, labels)
+    # the peak operating point with its sign, where it is drawn (move 1 runs down: negative torque)
+    assert any(label.startswith(("peak 0.860 N m", "peak -0.860 N m")) for label in labels), labels
     assert design.motor in fig._suptitle.get_text() and "min_peak_torque" in fig._suptitle.get_text()
     # the path drawn is the design's: its largest |torque| is the peak of the check table
     cycle = next(line for line in panel[0].get_lines() if line.get_label() == "cycle")
