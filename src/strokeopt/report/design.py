@@ -121,8 +121,8 @@ def design_text(design: Design, comparison: list[dict] | None = None) -> str:
     lines.append(format_table([{**m.to_dict(), "duration_ms": m.duration * 1e3} for m in design.moves],
                               [("index", "move"), ("name", "interval"), ("stroke_mm", "stroke mm"),
                                ("direction", "direction"),
-                               ("duration_ms", "move time ms"), ("v_max_m_s", "v_max m/s"), ("a_max_m_s2", "a_max m/s2"),
-                               ("jerk_max_m_s3", "jerk_max m/s3"), ("C_a", "C_a")]))
+                               ("duration_ms", "move time ms"), ("v_max_m_s", "|v| max m/s"), ("a_max_m_s2", "|a| max m/s2"),
+                               ("jerk_max_m_s3", "|jerk| max m/s3"), ("C_a", "C_a")]))
     if design.checks:
         lines.append("")
         verified = [c for c in design.checks if "design_term" in c]

@@ -108,15 +108,16 @@ def _member_summary(problem, stroke: StrokeFunction, spm: float, step_angle: flo
             "moves": moves, "intervals": intervals}
 
 
-MEMBER_COLUMNS = [("interval", "interval"), ("member", "member"), ("v_max", "speed max"), ("a_max", "accel max"),
-                  ("jerk_max", "jerk max"), ("unit", "unit (/s, /s2, /s3)"), ("step_rate_max_Hz", "step rate Hz")]
+MEMBER_COLUMNS = [("interval", "interval"), ("member", "member"), ("v_max", "|speed| max"), ("a_max", "|accel| max"),
+                  ("jerk_max", "|jerk| max"), ("unit", "unit (/s, /s2, /s3)"), ("step_rate_max_Hz", "step rate Hz")]
 
 
+#: Peaks are magnitudes (|v| max ...), the move's sense in problem coordinates beside them (``direction``).
 KINEMATICS_COLUMNS = [
-    ("index", "#"), ("name", "interval"), ("stroke_mm", "stroke mm"), ("span_deg", "span deg"),
-    ("time_ms", "interval time ms"), ("v_max_m_s", "v_max m/s"), ("a_max_m_s2", "a_max m/s2"),
-    ("jerk_max_m_s3", "jerk_max m/s3"), ("pulley_speed_max_deg_s", "pulley w deg/s"),
-    ("pulley_speed_max_rpm", "pulley rpm"), ("pulley_accel_max_deg_s2", "pulley eps deg/s2"),
+    ("index", "#"), ("name", "interval"), ("stroke_mm", "stroke mm"), ("direction", "direction"),
+    ("span_deg", "span deg"), ("time_ms", "interval time ms"), ("v_max_m_s", "|v| max m/s"),
+    ("a_max_m_s2", "|a| max m/s2"), ("jerk_max_m_s3", "|jerk| max m/s3"), ("pulley_speed_max_deg_s", "pulley |w| deg/s"),
+    ("pulley_speed_max_rpm", "pulley |n| rpm"), ("pulley_accel_max_deg_s2", "pulley |eps| deg/s2"),
 ]
 
 
@@ -137,7 +138,7 @@ def _member_text(summary: dict) -> str:
             f"interval times {summary['interval_times']}), transmission {summary['transmission']}")
     head += "\nmotion law: " + ", ".join(sorted({m["law"] for m in summary["moves"]}))
     rows = [{**r, "time_ms": r["time_s"] * 1e3} for r in summary["intervals"]]
-    cols = [c for c in KINEMATICS_COLUMNS if c[0] in ("index", "name", "stroke_mm", "span_deg", "time_ms")]
+    cols = [c for c in KINEMATICS_COLUMNS if c[0] in ("index", "name", "stroke_mm", "direction", "span_deg", "time_ms")]
     members = [{"interval": m["name"], **row} for m in summary["moves"] for row in m["members"]]
     step = summary["step_angle_deg"]
     note = (f"\nmotor and members in their own units (m or rad); step rate at {step:g} deg per step"
