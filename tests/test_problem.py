@@ -127,3 +127,13 @@ def test_spans_that_would_be_ignored_or_empty(capsys, reference_path, sets, fiel
         args += ["--set", s]
     line = _run_error(capsys, args)
     assert field in line and words in line
+
+
+def test_set_makes_a_table_inside_a_section(capsys, reference_path):
+    # before: --set design.contact.keep_closed=... said "no such field" (the reference has no [design.contact])
+    # though the error of a typo listed 'contact' as known; now the table is made and validated like the file's
+    p = load_problem(reference_path, ['design.contact.keep_closed=["c21"]', "design.contact.min_contact_force_N=0"])
+    assert p.design.contact.keep_closed == ("c21",) and p.design.contact.min_contact_force == 0.0
+    line = _run_error(capsys, ["kinematics", str(reference_path), "--set", 'design.contcat.keep_closed=["c21"]',
+                               "--plot", "none"])
+    assert "design.contcat" in line and "did you mean 'contact'" in line

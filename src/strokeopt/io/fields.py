@@ -188,6 +188,10 @@ def apply_overrides(data: dict, overrides: list[str], file: str) -> frozenset:
                     raise ProblemError(file, where, f"--set {text}: no element {seg} (there are {len(node) if isinstance(node, list) else 0})")
                 node = node[seg - 1]
             else:
+                if isinstance(node, dict) and seg not in node and depth > 0:
+                    # a table inside a section the file has (e.g. design.contact): made here, and the
+                    # section's reader validates it like one written in the file (unknown names included)
+                    node[seg] = {}
                 if not isinstance(node, dict) or seg not in node:
                     raise ProblemError(file, where, f"--set {text}: no such field in the problem"
                                        f"{did_you_mean(seg, node) if isinstance(node, dict) else ''}")
