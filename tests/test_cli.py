@@ -66,3 +66,13 @@ def test_json_stays_json_with_verbose_solver_logs(tmp_path):
     assert run.returncode == 0, run.stderr
     assert json.loads(run.stdout)["status"] == "optimal"  # only JSON on stdout
     assert "Ipopt" in run.stderr  # the solver log went to stderr
+
+
+@pytest.mark.parametrize("argv", [["solve", "{p}", "600"], ["verify", "out/design.json", "--spm", "700"]])
+def test_an_option_in_the_wrong_place_gets_the_commands_usage(capsys, reference_path, argv):
+    # before: the top level's usage ("strokeopt [-h] [--version] COMMAND ..."), which names no command
+    argv = [a.replace("{p}", str(reference_path)) for a in argv]
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and f"usage: strokeopt {argv[0]}" in err and "unrecognized arguments" in err

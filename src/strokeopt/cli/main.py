@@ -8,6 +8,7 @@ failed for a stated reason.
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -40,9 +41,17 @@ def _fail(args, word: str, status: str, exc: Exception, code: int) -> int:
     return code
 
 
+def command_parser(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser:
+    """The sub-parser of ``command`` (for its usage line in an error)."""
+    subs = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return subs.choices[command]
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:  # said by the command's own parser: its usage, not the top level's
+        command_parser(parser, args.command).error(f"unrecognized arguments: {' '.join(extra)}")
     try:
         _check_plot_format(args)
         check_outputs(args)  # an unwritable --out or --plot fails now, not after the work
