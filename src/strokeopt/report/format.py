@@ -58,6 +58,8 @@ def drive_text(drive: dict) -> str:
     pulley = f"pulley {teeth} teeth" if teeth is not None else \
         drive.get("transmission") or "continuous pulley radius"
     return f"drive: motor {drive.get('motor') or '(none)'}, {pulley} (from {drive['from']})"
+
+
 def period_text(cycle_s: float, spm: float) -> str:
     """The cam cycle and the stitch period, both named: 'cam cycle 200.0 ms = 2 stitches of 100.0 ms'."""
     stitch_s = 60.0 / spm
