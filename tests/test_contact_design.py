@@ -95,7 +95,12 @@ def test_no_contact_section_builds_no_contact_rows(reference):
     ('keep_closed = "c21"', "design.contact.keep_closed", "must be an array"),
 ])
 def test_bad_contact_input_names_the_field(write_problem, capsys, contact, field, words):
-    path = write_problem(lambda text: text + "\n[design.contact]\n" + contact + "\n")
+    _refused_in_one_line(write_problem, capsys, "[design.contact]\n" + contact, field, words)
+
+
+def _refused_in_one_line(write_problem, capsys, section: str, field: str, words: str) -> None:
+    """The reference with ``section`` appended: refused by the reader (field, words) and by solve (exit 2, one line)."""
+    path = write_problem(lambda text: text + "\n" + section + "\n")
     with pytest.raises(ProblemError) as err:
         load_problem(path)
     assert err.value.field == field and words in err.value.message
@@ -234,12 +239,7 @@ def test_600_spm_k2_free_with_an_impact_velocity_of_2_m_s(write_problem):
     ("[design.free.k2]\nstiffness_N_m = [3000, 900]", "design.free.k2.stiffness_N_m", "lower <= upper"),
 ])
 def test_bad_free_parameter_names_the_field(write_problem, capsys, free, field, words):
-    path = write_problem(lambda t: t + "\n" + free + "\n")
-    with pytest.raises(ProblemError) as err:
-        load_problem(path)
-    assert err.value.field == field and words in err.value.message
-    assert main(["solve", str(path), "--plot", "none"]) == 2
-    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+    _refused_in_one_line(write_problem, capsys, free, field, words)
 
 
 def test_a_free_spring_stated_twice_is_refused(write_problem):
