@@ -153,3 +153,22 @@ def test_min_rms_torque_of_a_stepper_builds_its_torque_integral():
     tau = load_torque(design.motor_spec, problem.transmission, problem.drive.load, k.s, k.v, k.a).total
     rms = float(np.sqrt(np.trapezoid(tau**2, k.t) / (k.t[-1] - k.t[0])))
     assert design.objective_value == pytest.approx(rms, rel=0.01)
+
+
+@pytest.mark.slow  # a min_time solve with --out, its report and a comparison read from design.json
+def test_report_and_compare_read_a_stepper_design(capsys, tmp_path):
+    # before: report --design and compare refused every stepper design ("'HY200-1713' is a stepper motor;
+    # this takes a servo motor"), though solve --out wrote the same report
+    out = tmp_path / "knit"
+    assert main(["solve", str(KNITTING), "--objective", "min_time", "--out", str(out), "--plot", "none"]) == 0
+    assert main(["report", str(KNITTING), "--design", str(out / "design.json"), "--out", str(tmp_path / "r.html")]) == 0
+    assert main(["compare", str(out / "design.json"), str(out / "design.json"), "--out", str(tmp_path / "c.html")]) == 0
+    assert "HY200-1713" in (tmp_path / "r.html").read_text(encoding="utf-8")
+    capsys.readouterr()
+
+
+def test_size_with_a_servo_motor_on_the_screw_lever(capsys):
+    # before: a TypeError traceback (the screw lever has no pulley pitch diameter); solve took the same motor
+    code = main(["size", str(KNITTING), "--motor", "055U2B30", "--plot", "none"])
+    out, err = capsys.readouterr()
+    assert code == 0 and "Traceback" not in err and "055U2B30 with the screw_lever ranks first" in out

@@ -159,6 +159,6 @@ def design_from_data(problem, data: dict, stroke: StrokeFunction) -> Design:
                     pitch_diameter=None if pd is None else pd * 1e-3, motor=data.get("motor"),
                     notes=list(data.get("notes", [])))
     if design.motor is not None and getattr(problem, "drive", None) is not None:
-        design.motor_spec = problem.drive.catalogue().motor(design.motor, (str(problem.file), "drive.motor"))
+        design.motor_spec = problem.drive.catalogue().actuator(design.motor, (str(problem.file), "drive.motor"))
     design.settings = getattr(problem, "design", None)
     return design

@@ -65,7 +65,8 @@ class Candidate:
         out = {
             "motor": self.motor.name,
             "pulley_teeth": self.pulley.teeth,
-            "pulley_pitch_diameter_mm": self.pulley.pitch_diameter * 1e3,
+            # None: the transmission is no belt pulley (a servo motor on a screw lever)
+            "pulley_pitch_diameter_mm": None if self.pulley.pitch_diameter is None else self.pulley.pitch_diameter * 1e3,
             "peak_torque_N_m": self.check("peak_torque").value,
             "torque_limit_N_m": self.check("peak_torque").limit,
             "rms_torque_N_m": self.check("rms_torque").value,

@@ -25,7 +25,8 @@ def sizing_verdict(sizing) -> str:
     what = (f"{b.name} {b.value:.4g} {b.unit} against the limit {b.limit:.4g} {b.unit} "
             f"(margin {b.margin:.3g})")
     if best.feasible:
-        return f"ok: {best.motor.name} with a {best.pulley.teeth}-tooth pulley ranks first; binding: {what}"
+        on = f"a {best.pulley.teeth}-tooth pulley" if best.pulley.teeth is not None else f"the {best.pulley.name}"
+        return f"ok: {best.motor.name} with {on} ranks first; binding: {what}"
     closest = max(sizing.candidates, key=lambda c: c.check(c.binding).margin)
     c = closest.check(closest.binding)
     counts = {}
@@ -249,9 +250,11 @@ def draw_pull_out(ax, motor, omega, torque, limits, title: str) -> None:
     ax.plot(rate, torque, color="tab:blue", lw=1.2, label="demand over the cycle")
     from ..drive.checks import pull_out_ratio
 
-    i = int(np.argmax(pull_out_ratio(torque, omega, motor)))
+    ratio = pull_out_ratio(torque, omega, motor)
+    i = int(np.argmax(ratio))
     ax.plot(rate[i], torque[i], "o", color="tab:blue", ms=7,
-            label=f"least reserve: {torque[i]:.3f} N m at {rate[i]:.0f} Hz")
+            label=f"least reserve: demand {torque[i]:.3f} N m at {rate[i]:.0f} Hz, "
+                  + (f"{100 * ratio[i]:.0f} % of pull-out" if np.isfinite(ratio[i]) else "beyond the pull-out table"))
     ax.set_xlabel("step rate [Hz] (|motor speed| / step angle)")
     ax.set_ylabel("|motor torque| [N m]")
     ax.set_title(title, fontsize=10)
