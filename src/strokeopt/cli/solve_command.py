@@ -17,13 +17,9 @@ def _servo_handover_check(problem):
         return None
 
     def check(design):
-        from ..servo.accuracy import stroke_accuracy
+        from ..servo.accuracy import design_accuracy
 
-        radius = None if design.pulley_teeth is not None else design.radius
-        # the design's problem: the file's with the values of free model parameters ([design.free]) found
-        result = stroke_accuracy(design.problem, design.stroke, design.spm, motor=design.motor_spec,
-                                 pulley_teeth=design.pulley_teeth, radius=radius)
-        return result.handover_error, "full servo simulation"
+        return design_accuracy(design).handover_error, "full servo simulation"
 
     return check
 

@@ -65,12 +65,9 @@ def gather(problem, design, summary: dict, scenes=None, options=None, source: st
 
     accuracy = None
     if getattr(problem, "servo", None) is not None and design.motor_spec is not None:
-        from ..servo.accuracy import stroke_accuracy
+        from ..servo.accuracy import design_accuracy
 
-        radius = None if design.pulley_teeth is not None else design.radius
-        # the design's own problem: with the values of free model parameters found, as the solve checks it
-        accuracy = stroke_accuracy(design.problem, design.stroke, design.spm, motor=design.motor_spec,
-                                   pulley_teeth=design.pulley_teeth, radius=radius)
+        accuracy = design_accuracy(design)  # the solve's handover check
     names = list(problem.scenes or {})
     if scenes is None:
         scenes = ["release"] if "release" in names else names[:1]

@@ -236,6 +236,16 @@ def stroke_accuracy(problem, stroke, spm: float, *, motor=None, pulley_teeth: in
                              gains=tuned_gains(axis, settings), label=label)
 
 
+def design_accuracy(design) -> AccuracyResult:
+    """The full servo simulation of a design (:class:`~strokeopt.design.result.Design`): its stroke at its
+    rate on its own problem (with the values of free model parameters it found), motor and pulley (or
+    continuous radius) -- the number the solve's check table, the design report and ``strokeopt accuracy
+    --design`` print."""
+    radius = None if design.pulley_teeth is not None else design.radius
+    return stroke_accuracy(design.problem, design.stroke, design.spm, motor=design.motor_spec,
+                           pulley_teeth=design.pulley_teeth, radius=radius)
+
+
 def residual_vibration_table(problem, spm: float | None = None, strokes=(), *,
                              settings: ServoSettings | None = None, axis: DriveAxis | None = None,
                              gains: Gains | None = None, progress=None) -> list[dict]:

@@ -181,6 +181,18 @@ def _confirm(problem, design, spm: float, acc: float) -> _Trial:
     return _Trial(spm, excess, reason, design, res)
 
 
+def _confirm_min_time(problem, design, ceiling: float | None, acc: float) -> tuple[float, _Trial]:
+    """The rate a ``min_time`` design may claim (its own, or a looser accuracy's lower rate, which bounds
+    it: the design then runs there) and its full simulation there."""
+    top = design.spm if ceiling is None else min(design.spm, ceiling)
+    if top != design.spm:
+        from ..design.result import stroke_from_solutions
+
+        design = replace(design, spm=top, stroke=stroke_from_solutions(problem, top, design.solutions,
+                                                                       design.stroke.label))
+    return top, _confirm(problem, design, top, acc)
+
+
 def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowest: float = 100.0,
                      start: float | None = None, progress=None) -> list[TradeoffPoint]:
     """Highest stitch rate with the optimal stroke for each accuracy [m], by ``min_time`` continuation.
@@ -231,13 +243,12 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
             ceiling = 0.0  # a design of a tighter accuracy would meet this one
             continue
         warm, spm0 = d, d.spm
-        top = d.spm if ceiling is None else min(d.spm, ceiling)
         binding = _binding_of(d.notes[0].split("bound by:", 1)[-1])
         say(tag, f"min_time {d.spm:.1f} spm ({binding}); full simulation")
-        hi = _confirm(problem, d, top, acc) if top == d.spm else _Trial(top, math.inf)
+        top, hi = _confirm_min_time(problem, d, ceiling, acc)
         for _ in range(RESERVE_STEPS):
             res = hi.result
-            if hi.ok or res is None or not res.torque_limited or res.handover_error > acc:
+            if hi.ok or not res.torque_limited or res.handover_error > acc:
                 break
             # the loop's torque command passes the limit the rigid load meets: keep the excess in reserve
             reserve = 1.0 - (1.0 - reserve) * res.torque_limit / res.peak_torque_command * (1.0 - RESERVE_MARGIN)
@@ -247,17 +258,10 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
             except SolverError as exc:
                 say(tag, f"min_time with {100 * reserve:.1f} % torque reserve: no design ({exc.reason.splitlines()[0]})")
                 break
-            warm, spm0 = d, d.spm
-            top = d.spm if ceiling is None else min(d.spm, ceiling)
-            binding = "torque_limit"
+            warm, spm0, binding = d, d.spm, "torque_limit"
             say(tag, f"min_time {d.spm:.1f} spm with {100 * reserve:.1f} % of the torque limit in reserve for the "
                      "loop; full simulation")
-            hi = _confirm(problem, d, top, acc) if top == d.spm else _Trial(top, math.inf)
-        if top != d.spm:  # the looser accuracy's rate bounds this one: the min_time design runs there too
-            from ..design.result import stroke_from_solutions
-
-            d_top = replace(d, spm=top, stroke=stroke_from_solutions(problem, top, d.solutions, d.stroke.label))
-            hi = _confirm(problem, d_top, top, acc)
+            top, hi = _confirm_min_time(problem, d, ceiling, acc)
         if hi.ok:
             found, lo = top, hi
         else:
