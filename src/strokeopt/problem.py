@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 from .drive.transmission import Transmission
 from .errors import ProblemError
 from .motion.laws import MotionLaw
-from .motion.timing import TimingDiagram
+from .motion.timing import SPM_RANGE, TimingDiagram  # noqa: F401 (SPM_RANGE: read from here too)
 
 if TYPE_CHECKING:
     from .contact.model import Model
@@ -21,12 +21,6 @@ if TYPE_CHECKING:
     from .design.settings import DesignSettings
     from .drive.spec import DriveSpec
     from .servo.settings import ServoSettings
-
-
-#: Plausible stitch rates [spm] (``machine.spm``, ``--spm``): from one stitch a minute (a slow indexing
-#: machine) to 20000 spm, twice the fastest textile machines; outside it a cycle is either too long for the
-#: servo simulation's time grid or too short for any move to be driven.
-SPM_RANGE = (1.0, 20000.0)
 
 
 @dataclass(frozen=True)

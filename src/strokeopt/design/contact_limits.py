@@ -51,14 +51,19 @@ class KeepClosed(Limit):
             scale = max(abs(rest), fmin, 1.0)
             follower = cl.joining[name]
             for k, mv in enumerate(req.moves):
-                s = ca.vec(g.si(k, greville, "s"))
+                s_nodes = g.si(k, greville, "s")
+                s = ca.vec(s_nodes)
                 v = ca.vec(g.si(k, greville, "v"))
                 a = ca.vec(g.vars[k].hull("a")) * (mv.stroke / g.T[k] ** 2)
                 xd, vd, ad = cd.driven(s, v, a)
                 # smooth rows: the force without the stops, relaxed steeply (RELAX per metre) past a stop, where
-                # the cluster no longer holds (a 0/1 mask there made IPOPT cycle as points crossed the stop)
+                # the cluster no longer holds (a 0/1 mask there made IPOPT cycle as points crossed the stop);
+                # a row is relaxed by the overrun of the end of its interval that is nearer the stop, so an
+                # interval that holds anywhere is held everywhere (its polynomial cannot dip between the nodes)
                 force = cl.contact_force(name, xd, vd, ad, stiffness, stops=False)
-                overrun = cl.overrun(name, xd)
+                ends = [cl.overrun(name, cd.driven(s_nodes[:, j], 0 * s_nodes[:, j], 0 * s_nodes[:, j])[0])
+                        for j in (0, greville.size - 1)]
+                overrun = ca.repmat(ca.fmin(*ends), greville.size, 1)
                 lim = LimitGroup(
                     f"keep {name} closed move {mv.index}", f"contact {name} closed", rest, "N",
                     lambda sig, rest=rest, scale=scale: rest + sig * scale, mv.index, f"keep_closed {name}",

@@ -76,9 +76,11 @@ class JerkBound(Limit):
         if mv.jerk_bound is None:
             return
         # the bound on the unit jerk; a bound in m/s^3 allows the unit jerk to grow with the cube of a
-        # free cycle time (a bound from the file's law scales with the law's own jerk: constant)
+        # free cycle time (a bound from the file's law at the design's rate scales with the law's own jerk:
+        # constant; at a stated rate, jerk_law_spm, it is a bound in m/s^3)
         jb = b.param(f"jerk bound {mv.index}", lambda r, k=k: r.moves[k].jerk_bound / r.moves[k].j_scale)
-        if not g.request.settings.jerk_max_from_law:
+        settings = g.request.settings
+        if not settings.jerk_max_from_law or settings.jerk_law_spm:
             jb = jb * g.time_scale**3
         hull = x.hull("j") / jb  # Bernstein coefficients: bounds the jerk everywhere, not only at nodes
         lim = LimitGroup(f"jerk bound move {mv.index}", "jerk bound", mv.jerk_bound, "m/s^3",

@@ -54,8 +54,11 @@ class Move:
 def design_moves(problem, spm: float, settings: DesignSettings) -> list[Move]:
     """The moves of ``problem`` at ``spm`` with their jerk bounds (``[design] jerk_max``)."""
     sch = problem.timing.schedule(spm)
+    # the law's jerk at a stated rate (jerk_law_spm): the durations there; else at this rate
+    law_durations = (problem.timing.schedule(settings.jerk_law_spm).duration if settings.jerk_law_spm
+                     else sch.duration)
     out = []
-    for itv, t0, dur in zip(problem.timing.intervals, sch.t_start, sch.duration):
+    for itv, t0, dur, law_dur in zip(problem.timing.intervals, sch.t_start, sch.duration, law_durations):
         if not itv.is_move:
             continue
         if not dur > 0:
@@ -69,7 +72,7 @@ def design_moves(problem, spm: float, settings: DesignSettings) -> list[Move]:
                 raise ProblemError(str(problem.file), "design.jerk_max_from_law",
                                    f"the motion law {itv.law.label} of move {itv.move_index} has unbounded jerk; "
                                    "give jerk_max_m_s3 instead")
-            bound = c_j * abs(itv.stroke) / dur**3
+            bound = c_j * abs(itv.stroke) / law_dur**3
         out.append(Move(itv.move_index, itv.index, itv.name,
                         float(t0), float(dur), itv.start_position, itv.stroke, bound))
     return out

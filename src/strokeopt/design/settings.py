@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..drive.transmission import TEETH_RANGE
+from ..motion.timing import SPM_RANGE
 from .collocation import Mesh
 from .objectives import OBJECTIVES
 from .solver import check_solver_options
@@ -46,7 +47,8 @@ class DesignSettings:
     following a cam table; 3: also jerk, with the jerk continuous inside the move).
     ``jerk_max``: bound on |jerk| [m/s^3] (None: unbounded);
     ``jerk_max_from_law``: bound each move by the peak jerk of the file's
-    motion law on that move instead. ``accuracy``: allowed position error at
+    motion law on that move instead (at the design's own rate; with ``jerk_law_spm`` at that rate, a bound
+    in m/s^3 that a free cycle time does not scale: the classic machine's jerk at its operating point). ``accuracy``: allowed position error at
     the handover [m]. ``check_points``: fine-grid points per mesh interval;
     ``check_tolerance``: relative violation between nodes that triggers a
     mesh refinement (at most ``refinements`` doublings). ``torque_reserve``: the share of the
@@ -78,6 +80,7 @@ class DesignSettings:
     #: design exceeds it, status "limits exceeded"), for a move the motor cannot make, to see it anyway
     enforce_pull_out: bool = True
     torque_reserve: float = 0.0
+    jerk_law_spm: float | None = None
 
     @property
     def mesh(self) -> Mesh:
@@ -98,6 +101,9 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
     from_law = f.boolean("jerk_max_from_law", False)
     if from_law and jerk is not None:
         raise f.error("jerk_max_from_law", "give either jerk_max_m_s3 or jerk_max_from_law = true, not both")
+    law_spm = f.number("jerk_law_spm", None, min=SPM_RANGE[0], max=SPM_RANGE[1])
+    if law_spm is not None and not from_law:
+        raise f.error("jerk_law_spm", "the rate of the law's jerk bound needs jerk_max_from_law = true")
     if rest == 3 and d < 2:
         raise f.error("collocation_degree", "rest_order = 3 (jerk continuous) needs collocation_degree >= 2")
     if objective == "min_snap" and d < 2:
@@ -135,7 +141,7 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
     f.finish()
     return DesignSettings(objective, n, d, rest, jerk, from_law, accuracy, motor_choice, pulley, zmin, zmax,
                           check_points, check_tol, refinements, pulley_inertia, options, contact, free, pull_out,
-                          reserve)
+                          reserve, law_spm)
 
 
 def parse_free(f) -> tuple:

@@ -79,7 +79,7 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     mesh = mesh or settings.mesh
     warm = warm_start.solutions if isinstance(warm_start, Design) else warm_start
     radius0 = warm_start.radius if isinstance(warm_start, Design) else None
-    options = _solver_options(settings, solver_options, verbose)
+    options = _solver_options(settings, solver_options, verbose, free_time(objective))
     drive = DriveSetup(problem, settings) if getattr(problem, "drive", None) is not None else None
     if drive is None and objective in TORQUE_OBJECTIVES:
         raise needs_drive_error(problem, objective)

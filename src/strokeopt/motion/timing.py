@@ -22,6 +22,11 @@ import numpy as np
 from .laws import MotionLaw
 from .stroke import StrokeFunction, dwell_piece, law_piece
 
+#: Plausible stitch rates [spm] (``machine.spm``, ``--spm``): from one stitch a minute (a slow indexing
+#: machine) to 20000 spm, twice the fastest textile machines; outside it a cycle is either too long for the
+#: servo simulation's time grid or too short for any move to be driven.
+SPM_RANGE = (1.0, 20000.0)
+
 INTERVAL_TIMES = ("nominal", "published")
 
 
