@@ -76,7 +76,7 @@ def test_impact_velocity_is_a_pinned_limit_confirmed_by_the_simulation(write_pro
 def test_stock_spring_highest_rate_keeping_the_follower_on_the_shell():
     # issue acceptance: with the stock k2 a stroke keeps c21 closed up to at least 450 spm, where the modified
     # sine lags from about 340 spm (thesis ch. 6); the jerk bound is the modified sine's at the thesis drive's
-    # 600 spm (jerk_law_spm = 600 in the shipped file), confirmed by the full simulation (lag < 0.05 mm)
+    # 600 spm (jerk_max_from_law = 600 in the shipped file), confirmed by the full simulation (lag < 0.05 mm)
     from pathlib import Path
 
     path = Path(__file__).resolve().parents[1] / "problems" / "deco2000_contact_design.toml"
@@ -90,20 +90,26 @@ def test_stock_spring_highest_rate_keeping_the_follower_on_the_shell():
     assert law.metrics["max_lag_mm"] > 1.0
 
 
-def test_jerk_bound_of_the_law_at_a_stated_rate(write_problem):
-    # jerk_law_spm: the law's peak jerk C_j h / T^3 with the move's duration at that rate, in m/s^3
-    from strokeopt.design.request import design_moves as moves_of
+def test_jerk_bound_of_the_law_at_a_stated_rate(write_problem, capsys):
+    # jerk_max_from_law = <spm>: the law's peak jerk C_j h / T^3 with the move's duration at that rate, in m/s^3
+    from strokeopt.design.request import design_moves
 
-    problem, _ = contact_problem(write_problem, 'keep_closed = ["c21"]', ["design.jerk_law_spm=600"])
-    at_600 = moves_of(problem, 600, problem.design)
+    problem, path = contact_problem(write_problem, 'keep_closed = ["c21"]', ["design.jerk_max_from_law=600"])
+    assert problem.design.jerk_max_from_law and problem.design.jerk_law_spm == 600
+    at_600 = design_moves(problem, 600, problem.design)
     for spm in (450, 900):
-        for mv, ref in zip(moves_of(problem, spm, problem.design), at_600):
+        for mv, ref in zip(design_moves(problem, spm, problem.design), at_600):
             assert mv.jerk_bound == pytest.approx(ref.jerk_bound, rel=1e-12)
-    law = problem.timing.intervals[0].law if problem.timing.intervals[0].is_move else problem.timing.intervals[1].law
     first = at_600[0]
+    law = next(i.law for i in problem.timing.intervals if i.is_move)
     assert first.jerk_bound == pytest.approx(law.characteristics.C_j * abs(first.stroke) / first.duration**3)
-    with pytest.raises(ProblemError, match="jerk_law_spm"):
-        load_problem(_, [*THESIS_DRIVE, "design.jerk_max_from_law=false", "design.jerk_law_spm=600"])
+    # true: at the design's own rate (the bound falls with the cube of the rate)
+    own = load_problem(path, [*THESIS_DRIVE, "design.jerk_max_from_law=true"])
+    assert design_moves(own, 300, own.design)[0].jerk_bound == pytest.approx(first.jerk_bound / 8)
+    for bad, words in (("0", "outside the plausible range"), ('"600"', "true, false or a stitch rate")):
+        with pytest.raises(ProblemError, match="design.jerk_max_from_law") as err:
+            load_problem(path, [*THESIS_DRIVE, f"design.jerk_max_from_law={bad}"])
+        assert words in str(err.value)
 
 
 @pytest.mark.slow  # one solve and one simulation
@@ -117,6 +123,24 @@ def test_keep_closed_holds_between_the_nodes_up_to_the_stop(write_problem):
     assert row["ok"] and row["value"] > -0.01 and design.status == "optimal"
     sim = simulate_scene(problem, "release", 450, stroke=design.stroke)
     assert sim.metrics["max_lag_mm"] < 0.05 and not sim.metrics["premature_release"]
+
+
+@pytest.mark.slow  # one solve and one simulation
+def test_impact_limit_whose_pin_move_failed_keeps_the_solution_before_it():
+    # 1.786 m/s (the second point of --study impact 1.6:2.9:8): moving the impact pin to the fourth solve's
+    # crossing made IPOPT fail (Restoration_Failed); the solve keeps the solution before that move and the fine
+    # grid and the full simulation confirm it
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "problems" / "deco2000_contact_design.toml"
+    vmax = 1.6 + (2.9 - 1.6) / 7
+    problem = load_problem(path, [f"design.contact.impact_velocity_max_m_s={vmax!r}"])
+    design = solve_design(problem)
+    assert design.status == "optimal"
+    row = next(c for c in design.checks if c["name"] == "impact velocity (pad)")
+    assert row["ok"] and row["value"] <= vmax * (1 + 1e-3)
+    sim = simulate_scene(design.problem, "release", 600, stroke=design.stroke)  # with the k2 it found
+    assert sim.metrics["impact_velocity_m_s"] == pytest.approx(vmax, abs=0.02) and sim.metrics["max_lag_mm"] < 0.05
 
 
 def test_no_contact_section_builds_no_contact_rows(reference):

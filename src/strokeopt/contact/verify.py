@@ -110,11 +110,15 @@ def verification(result: SceneResult, lag_max: float | None = None, impact_veloc
                     and isinstance(r["value"], (int, float)) and not isinstance(r["value"], bool)]
         verdict = (f"verified in scene {result.scene!r} at {result.spm:g} spm: " +
                    (", ".join(judged) + " within limits" if judged else "no criterion to judge") +
-                   ("; not judged (no limit: [design.contact]): " + ", ".join(
+                   (f"; not judged (no [design.contact] {', '.join(LIMIT_FIELDS.get(r['criterion'], r['criterion']) for r in unjudged)}): " + ", ".join(
                        f"{r['criterion']} {r['value']:.4g} {r['unit']}" for r in unjudged) if unjudged else "") +
                    ("; " + ", ".join(f"{c} {v:.4g} {u}" for c, v, u in reported) + " (reported)" if reported else ""))
     return {"scene": result.scene, "spm": result.spm, "status": "verification failed" if failed else "ok",
             "criteria": rows, "failed": [r["criterion"] for r in failed], "verdict": verdict}
+
+
+#: The [design.contact] field that sets the limit of a criterion (named where a criterion is not judged).
+LIMIT_FIELDS = {"lag": "lag_max_mm", "impact velocity": "impact_velocity_max_m_s"}
 
 
 def design_verification(design, scene: str | None = None, options: SimulationOptions | None = None) -> dict | None:

@@ -77,7 +77,7 @@ class JerkBound(Limit):
             return
         # the bound on the unit jerk; a bound in m/s^3 allows the unit jerk to grow with the cube of a
         # free cycle time (a bound from the file's law at the design's rate scales with the law's own jerk:
-        # constant; at a stated rate, jerk_law_spm, it is a bound in m/s^3)
+        # constant; at a stated rate, jerk_max_from_law = <spm>, it is a bound in m/s^3)
         jb = b.param(f"jerk bound {mv.index}", lambda r, k=k: r.moves[k].jerk_bound / r.moves[k].j_scale)
         settings = g.request.settings
         if not settings.jerk_max_from_law or settings.jerk_law_spm:

@@ -183,6 +183,7 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
     for attempt in range(settings.refinements + 1):
         pins = None
         enforce = req.enforce_accuracy and bool(req.error_terms)
+        held = None  # the last solution whose only fault is pins short of its crossings
         for _ in range(PIN_ITERATIONS):
             t0 = time.perf_counter()
             nlp = prepare(replace(req, mesh=mesh, warm=warm, pin_times=pins,
@@ -192,6 +193,12 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
             iterations += int(stats.get("iter_count", 0) or 0)
             status = str(stats.get("return_status", "unknown"))
             ok = stats.get("success", False) if choice is not None and choice.candidates else status in STATUS_OK
+            if not ok and held is not None:
+                # moving the pins made IPOPT fail (a restoration failure next to the impact pin): keep the
+                # solution before it; the fine grid reads the limits at the true crossings and reports what
+                # the pins miss
+                nlp, sol, x, sols, status = held
+                break
             if not ok:
                 raise diagnose(nlp.request, status)
             x = np.asarray(sol["x"]).ravel()
@@ -202,6 +209,7 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
                         and float(nlp.value(total, x).item()) > settings.accuracy)
             if not violated and pins_in_place(nlp, x, new):
                 break
+            held = (nlp, sol, x, sols, status) if not violated else None
             pins, warm, enforce = new, sols, enforce or violated
         rated = solution_request(nlp, x)  # the rate the solution runs at
         fine, _ = fine_grid_report(rated.moves, sols, settings.check_points)

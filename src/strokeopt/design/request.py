@@ -54,7 +54,7 @@ class Move:
 def design_moves(problem, spm: float, settings: DesignSettings) -> list[Move]:
     """The moves of ``problem`` at ``spm`` with their jerk bounds (``[design] jerk_max``)."""
     sch = problem.timing.schedule(spm)
-    # the law's jerk at a stated rate (jerk_law_spm): the durations there; else at this rate
+    # the law's jerk at a stated rate (jerk_max_from_law = <spm>): the durations there; else at this rate
     law_durations = (problem.timing.schedule(settings.jerk_law_spm).duration if settings.jerk_law_spm
                      else sch.duration)
     out = []

@@ -47,8 +47,9 @@ class DesignSettings:
     following a cam table; 3: also jerk, with the jerk continuous inside the move).
     ``jerk_max``: bound on |jerk| [m/s^3] (None: unbounded);
     ``jerk_max_from_law``: bound each move by the peak jerk of the file's
-    motion law on that move instead (at the design's own rate; with ``jerk_law_spm`` at that rate, a bound
-    in m/s^3 that a free cycle time does not scale: the classic machine's jerk at its operating point). ``accuracy``: allowed position error at
+    motion law on that move instead (at the design's own rate; ``jerk_law_spm``, the file's
+    ``jerk_max_from_law = <spm>``: at that rate, a bound in m/s^3 that a free cycle time does not scale,
+    the classic machine's jerk at its operating point). ``accuracy``: allowed position error at
     the handover [m]. ``check_points``: fine-grid points per mesh interval;
     ``check_tolerance``: relative violation between nodes that triggers a
     mesh refinement (at most ``refinements`` doublings). ``torque_reserve``: the share of the
@@ -98,12 +99,18 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
     rest = f.number("rest_order", 2, integer=True, min=1, max=3)
     # jerk bound up to 1e9 m/s^3 (a 1 mm move in 0.1 ms); beyond it leave it out (unbounded)
     jerk = f.number("jerk_max_m_s3", None, positive=True, max=1e9)
-    from_law = f.boolean("jerk_max_from_law", False)
+    # true: each move's law's peak jerk at the design's rate; a rate [spm]: the law's jerk there, in m/s^3 at
+    # every rate (the classic machine's jerk at its operating point)
+    law = f.raw("jerk_max_from_law", False)
+    law_spm = None
+    if not isinstance(law, bool):
+        if not isinstance(law, (int, float)):
+            raise f.error("jerk_max_from_law", f"must be true, false or a stitch rate [spm] (the law's jerk at that "
+                                               f"rate), got {law!r}")
+        law_spm = f.number("jerk_max_from_law", min=SPM_RANGE[0], max=SPM_RANGE[1])
+    from_law = law is True or law_spm is not None
     if from_law and jerk is not None:
         raise f.error("jerk_max_from_law", "give either jerk_max_m_s3 or jerk_max_from_law = true, not both")
-    law_spm = f.number("jerk_law_spm", None, min=SPM_RANGE[0], max=SPM_RANGE[1])
-    if law_spm is not None and not from_law:
-        raise f.error("jerk_law_spm", "the rate of the law's jerk bound needs jerk_max_from_law = true")
     if rest == 3 and d < 2:
         raise f.error("collocation_degree", "rest_order = 3 (jerk continuous) needs collocation_degree >= 2")
     if objective == "min_snap" and d < 2:

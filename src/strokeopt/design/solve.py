@@ -119,6 +119,10 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     for row in free:
         design.notes.append(f"free model parameter {row['parameter']} = {row['value']:.5g} (bounds {row['lower']:g} "
                             f"to {row['upper']:g})" + (f": at its {row['at_bound']} bound" if row["at_bound"] else ""))
+    if settings.jerk_max_from_law and settings.jerk_law_spm:
+        design.notes.append(f"jerk bound: the peak jerk of each move's law at {settings.jerk_law_spm:g} spm ([design] "
+                            f"jerk_max_from_law = {settings.jerk_law_spm:g}), in m/s^3 at every rate (" + ", ".join(
+                                f"move {mv.index} {mv.jerk_bound:.4g}" for mv in nlp.request.moves) + ")")
     if settings.torque_reserve and req.drive is not None:
         design.notes.append(f"torque reserve: the design uses at most {100 * (1 - settings.torque_reserve):g} % of "
                             f"the torque limit, {100 * settings.torque_reserve:g} % kept in reserve for the servo "

@@ -131,6 +131,15 @@ def impact_study(problem, velocities, *, objective: str | None = None, spm: floa
                     raise
                 # the previous limit's stroke may start IPOPT where it cannot restore feasibility: start afresh
                 d = solve_design(problem, objective=objective, spm=spm, settings=limited, error_terms=error_terms)
+            else:
+                if warm is not None and d.status == "limits exceeded":  # the same, for a solve that ended short
+                    try:
+                        fresh = solve_design(problem, objective=objective, spm=spm, settings=limited,
+                                             error_terms=error_terms)
+                    except SolverError:
+                        fresh = None
+                    if fresh is not None and fresh.status != "limits exceeded":
+                        d = fresh
         except SolverError as exc:
             rows.append({**row, "feasible": False, "reason": exc.reason.splitlines()[0],
                          "solve_time_s": time.perf_counter() - t0})
