@@ -49,6 +49,16 @@ def test_help_teaches(capsys):
     assert "--set" in out and "Example" in out
 
 
+def test_solve_help_names_every_objective(capsys):
+    from strokeopt.design.objectives import OBJECTIVES
+
+    with pytest.raises(SystemExit):
+        main(["solve", "--help"])
+    out = " ".join(capsys.readouterr().out.split())
+    missing = [name for name in OBJECTIVES if name not in out]
+    assert not missing, f"solve --help does not name {missing}"
+
+
 def test_unwritable_figure_format_is_bad_input(capsys, reference_path, tmp_path):
     assert main(["kinematics", str(reference_path), "--plot", str(tmp_path / "k.txt")]) == 2
     err = capsys.readouterr().err

@@ -90,6 +90,19 @@ def test_stock_spring_highest_rate_keeping_the_follower_on_the_shell():
     assert law.metrics["max_lag_mm"] > 1.0
 
 
+@pytest.mark.slow  # a min_time solve
+def test_min_time_without_a_jerk_bound_continues_past_the_iteration_limit():
+    # the stock spring without a jerk bound: from 600 spm IPOPT needs more than its 200 iterations; the solve
+    # continues from its feasible iterate (design/solver.py CONTINUE_MAX_ITER) to the highest rate, inside the
+    # issue's rigid-cluster estimate of 450-500 spm (before: Maximum_Iterations_Exceeded, exit 1)
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "problems" / "deco2000_contact_design.toml"
+    problem = load_problem(path, ["design.free.k2.stiffness_N_m=[900,900]", "design.jerk_max_from_law=false"])
+    design = solve_design(problem, objective="min_time")
+    assert 450 <= design.spm <= 500 and design.status == "optimal"
+
+
 def test_jerk_bound_of_the_law_at_a_stated_rate(write_problem, capsys):
     # jerk_max_from_law = <spm>: the law's peak jerk C_j h / T^3 with the move's duration at that rate, in m/s^3
     from strokeopt.design.request import design_moves

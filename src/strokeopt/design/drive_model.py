@@ -86,6 +86,7 @@ class DriveModel:
     forces: list = field(default_factory=list)  # belt forces of the moves, pins and dwells [N]
     pin_values: list = field(default_factory=list)  # pinned torques and forces relative to their limits
     pin_forces: list = field(default_factory=list)
+    pin_torques: list = field(default_factory=list)  # pinned torques [tau_ref] (refine.pins_in_place)
     sum_sq: Any = 0.0  # integral of (torque/tau_ref)^2 over the moves, divided by the period
     dwell_sq: Any = 0.0
 
@@ -192,6 +193,7 @@ class DriveModel:
         tau = ca.horzcat(tau, pin_t / self.tau_ref)
         self.forces.append(pin_f)
         self.pin_values.append(ca.vec(pin_t) / self.peak_lim)
+        self.pin_torques.append(ca.vec(pin_t) / self.tau_ref)
         self.pin_forces.append(ca.vec(pin_f))
         g.torques.append(tau)
         self.v.append(v)

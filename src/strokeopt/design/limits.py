@@ -259,6 +259,7 @@ class HandoverAccuracy(Limit):
         signed = sum(e.signed for _, e in terms) if terms else 0.0
         bound = sum(e.bound for _, e in terms) if terms else 0.0
         g.handover_total = _largest(signed, bound) if terms else 0.0
+        g.handover_signed, g.handover_bound = signed, bound  # the rows min_handover_error minimises
         if terms and isinstance(signed, (ca.MX, ca.SX)) and req.enforce_accuracy:
             acc = req.settings.accuracy
             lim = LimitGroup("handover accuracy", "handover accuracy", acc, "m", lambda sig, ac=acc: ac * (1 + sig))
@@ -306,3 +307,6 @@ def build_drive(g) -> None:
     for lim in DRIVE_LIMITS:
         lim.on_cycle(g)
     g.pin_values = ca.vertcat(*dm.pin_values) if dm.pin_values else None
+    if dm.pin_torques:  # the largest pinned torque over the largest torque of the cycle (refine.pins_in_place)
+        peak = ca.mmax(ca.fabs(ca.vertcat(*[ca.vec(t) for t in g.torques + g.dwell_torques])))
+        g.pin_share = ca.mmax(ca.fabs(ca.vertcat(*dm.pin_torques))) / ca.fmax(peak, 1e-12)

@@ -173,11 +173,14 @@ class Graph:
     mean_sq: Any = None
     move_sq: Any = None
     pin_values: Any = None  # the pinned points' torques and forces, relative to their limits
+    pin_share: Any = None  # the largest pinned torque over the largest torque of the cycle
     pin_motions: dict = field(default_factory=dict)  # (move, position) -> (weight, v, a) at the pin (pins.pin_motion)
     load: Any = None  # the drive's load, with the free model parameters in it (free.build_free)
     free_stiffness: dict = field(default_factory=dict)  # element name -> stiffness symbol (free.build_free)
     handover_terms: list = field(default_factory=list)  # (name, error expression [m])
     handover_total: Any = 0.0
+    handover_signed: Any = 0.0  # the summed signed error at each instant [m] (limits.HandoverAccuracy)
+    handover_bound: Any = 0.0  # the bound added at each instant [m] (an encoder count)
     # the objective (see objectives)
     unit: str = ""
     transform: Any = None  # scaled objective value, request -> SI value

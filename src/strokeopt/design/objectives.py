@@ -108,6 +108,23 @@ def min_time(g):
     return g.time_scale + _smoothing(g)
 
 
+def min_handover_error(g):
+    """The most accurate stroke at this rate: the largest handover error of the design's terms over the checked
+    instants (:class:`~.limits.HandoverAccuracy`, epigraph form), relative to ``[design] handover_accuracy_mm``."""
+    signed, bound = g.handover_signed, g.handover_bound
+    if not isinstance(signed, (ca.MX, ca.SX)):
+        raise ProblemError(str(g.problem.file), "design.objective",
+                           "min_handover_error needs a handover error term: a [servo] section (the servo loop and "
+                           "belt) and a move that ends at the handover")
+    b, scale = g.built, g.request.settings.accuracy
+    z = b.var("handover error", (1, 1), 0.0, np.inf, 1.0)
+    b.constrain("handover error epigraph", ca.vertcat(z - (signed + bound) / scale, z - (bound - signed) / scale),
+                0.0, np.inf)
+    g.unit, g.transform = "mm", (lambda f, r: f * scale * 1e3)
+    g.objective_expr = z
+    return z + _smoothing(g)
+
+
 def min_stiffness(g):
     """The softest springs: the free model stiffnesses of ``[design.free]`` (design/free.py), each relative to its
     upper bound, summed; the stroke is the one of least jerk among those the limits allow with them."""
@@ -139,6 +156,7 @@ class Objective:
     needs_drive: bool
     build: Callable
     free_time: bool = False
+    needs_terms: bool = False  # the handover error terms are part of every solve (not checked afterwards)
 
 
 REGISTRY = {o.name: o for o in (
@@ -155,6 +173,9 @@ REGISTRY = {o.name: o for o in (
               _integral_objective("snap", 7, "m^2/s^7")),
     Objective("min_stiffness", "the free model stiffnesses of [design.free] (the softest springs the limits allow), "
               "each relative to its upper bound", False, min_stiffness),
+    Objective("min_handover_error", "largest handover error of the design's terms (the servo loop and belt) over "
+              "the handover window: the most accurate stroke at this rate", True, min_handover_error,
+              needs_terms=True),
     Objective("min_time", "shortest stitch period (highest stitch rate) within every limit of the design, the "
               "interval times fixed fractions of the cycle", True, min_time, free_time=True),
 )}
@@ -170,6 +191,12 @@ def free_time(objective: str) -> bool:
     """Whether ``objective`` makes the cycle time a decision variable."""
     found = REGISTRY.get(objective)
     return found is not None and found.free_time
+
+
+def needs_terms(objective: str) -> bool:
+    """Whether ``objective`` is built from the handover error terms (they are then in every solve)."""
+    found = REGISTRY.get(objective)
+    return found is not None and found.needs_terms
 
 
 def needs_drive_error(problem, objective: str) -> ProblemError:

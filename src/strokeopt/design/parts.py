@@ -12,6 +12,7 @@ import math
 from dataclasses import replace
 
 from .refine import Outcome, solve_one
+from .objectives import needs_terms
 from .request import DriveChoice, SolveRequest
 from ..errors import ProblemError, SolverError
 
@@ -25,7 +26,8 @@ def choose_parts(req: SolveRequest, progress=None):
     """
     problem, spm, settings, drive, options = req.problem, req.spm, req.settings, req.drive, req.options
     objective, warm, radius0 = req.objective, req.warm, req.radius0
-    req = replace(req, error_terms=())  # the handover accuracy is checked at the chosen design (solve.py)
+    if not (needs_terms(objective) or req.enforce_accuracy):
+        req = replace(req, error_terms=())  # the handover accuracy is checked at the chosen design (solve.py)
     notes = []
     if settings.motor_choice == "bonmin":
         cands = tuple(drive.motors())

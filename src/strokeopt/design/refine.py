@@ -25,22 +25,28 @@ from .fine_grid import drive_checks_fine, fine_grid_report
 from .free import free_values
 from .limits import enforced_checks
 from .nlp import Nlp, prepare
-from .objectives import TIME_SCALE, free_time
+from .objectives import TIME_SCALE, free_time, needs_terms
 from .pins import pin_intervals, pin_times, pins_fit
 from .request import SolveRequest
+from .settings import DesignSettings
 from .solver import STATUS_OK, solve_nlp
 from ..errors import SolverError
 
 #: Re-solves that move the pinned points at most, per mesh.
 PIN_ITERATIONS = 5
+#: A pinned point whose torque and force stay below this share of their limits (and, for ``min_peak_torque``,
+#: whose torque stays below this share of the cycle's largest torque, the peak the objective holds) before and
+#: after its crossing moves sets nothing: its rows are slack, the solution stays, and no re-solve moves it (the
+#: fine grid reads the true values at the crossing).
+PIN_SLACK = 0.9
 #: A free cycle time (min_time): re-solves at the rate found at most, and the relative change of the
 #: rate below which it has settled.
 RATE_ITERATIONS = 12
 RATE_TOLERANCE = 1e-3
-#: The relative width of a bracket of rates (one solves faster than itself, one slower) at which a
-#: rate that never settled is capped at its lower end: ``F`` jumps there (the handover error's
-#: phase in the belt's vibration changes with the rate), and halving further costs a solve per halving.
-RATE_BRACKET = 4e-3
+#: The relative width of a bracket of rates (one solves faster than itself, one slower) at which a rate that
+#: never settled is capped at its lower end (``DesignSettings.rate_bracket``): ``F`` jumps there (the handover
+#: error's phase in the belt's vibration changes with the rate), and halving further costs a solve per halving.
+RATE_BRACKET = DesignSettings.rate_bracket
 
 
 @dataclass
@@ -83,7 +89,8 @@ def pins_in_place(nlp: Nlp, x: np.ndarray, new: dict) -> bool:
     """Whether the pinned points of ``nlp`` may stay where they are for the solution ``x``.
 
     ``new`` holds the solution's own crossing times. Moving the pins there must keep them in
-    their windows (the NLP's structure, see pins.py) and change the torque and belt force they hold by less than a tenth
+    their windows (the NLP's structure, see pins.py) and either leave every pinned row slack (:data:`PIN_SLACK`)
+    or change the torque and belt force they hold by less than a tenth
     of ``check_tolerance`` of the limits (the fine grid re-reads the true values after the
     solve). A move that does not set a limit can shift its crossing freely without a re-solve.
     """
@@ -96,9 +103,13 @@ def pins_in_place(nlp: Nlp, x: np.ndarray, new: dict) -> bool:
     if not pins_fit(nlp.graph.pins, pin_intervals(moved), req.mesh) or nlp.graph.pin_values is None:
         return False
     expr = nlp.graph.pin_values
-    before = nlp.value(expr, x).ravel()
-    after = np.asarray(ca.Function("pins", [ca.vertcat(*nlp.built.w), ca.vertcat(*nlp.built.p)], [expr])(
-        x, nlp.built.numbers(moved).p)).ravel()
+    peak_held = req.objective == "min_peak_torque" and nlp.graph.pin_share is not None
+    share = nlp.graph.pin_share if peak_held else ca.MX(0.0)  # only min_peak_torque holds a peak at a pin
+    at = ca.Function("pins", [ca.vertcat(*nlp.built.w), ca.vertcat(*nlp.built.p)], [expr, share])
+    before, share_before = (np.asarray(v).ravel() for v in at(x, nlp.numbers.p))
+    after, share_after = (np.asarray(v).ravel() for v in at(x, nlp.built.numbers(moved).p))
+    if max(np.max(np.abs(before)), np.max(np.abs(after)), share_before.max(), share_after.max()) <= PIN_SLACK:
+        return True  # slack rows before and after: they set nothing, wherever the crossing is
     return bool(np.max(np.abs(after - before), initial=0.0) <= req.settings.check_tolerance / 10)
 
 
@@ -127,7 +138,7 @@ def solve_free_time(req: SolveRequest) -> Outcome:
     faster than itself (``F(r) > r``) and one that solves slower are known, the next rate is
     ``F(r)``; then the middle of that bracket (a rate without a design counts as too fast): where
     the handover error binds, the error changes with the rate in a way the frozen numbers do not see,
-    ``F`` jumps, and the plain iteration jumps about with it. A bracket narrower than :data:`RATE_BRACKET` that never settled
+    ``F`` jumps, and the plain iteration jumps about with it. A bracket narrower than ``settings.rate_bracket`` that never settled
     (``F`` jumps there) ends in a solve at its lower rate with the rate capped there
     (``rate_cap``). The outcome is read at the last rate (time scale 1: every number exact)."""
     spm, warm, radius0, mesh = req.spm, req.warm, req.radius0, req.mesh
@@ -158,7 +169,7 @@ def solve_free_time(req: SolveRequest) -> Outcome:
             hi = spm
         if lo is None or hi is None:
             spm = rate
-        elif hi - lo <= RATE_BRACKET * lo:
+        elif hi - lo <= req.settings.rate_bracket * lo:
             spm, cap = lo, True
         else:
             spm = 0.5 * (lo + hi)
@@ -205,8 +216,13 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
             sols = nlp.unpack(x)
             new = pin_times(nlp.request, nlp.graph.pins, sols)
             total = nlp.graph.handover_total
-            violated = (not enforce and isinstance(total, (ca.MX, ca.SX))
-                        and float(nlp.value(total, x).item()) > settings.accuracy)
+            error = float(nlp.value(total, x).item()) if isinstance(total, (ca.MX, ca.SX)) else 0.0
+            violated = not enforce and error > settings.accuracy
+            if violated and needs_terms(req.objective):  # the least error there is: no stroke meets the accuracy
+                motor = f" for motor {choice.motor.name}" if choice is not None and choice.motor is not None else ""
+                raise SolverError(f"the design cannot meet the limits{motor} at {nlp.request.spm:g} spm: handover "
+                                  f"accuracy needs {error * 1e3:.4g} mm (the most accurate stroke), limit "
+                                  f"{settings.accuracy * 1e3:.4g} mm ({100 * (error / settings.accuracy - 1):.1f} % over)")
             if not violated and pins_in_place(nlp, x, new):
                 break
             held = (nlp, sol, x, sols, status) if not violated else None

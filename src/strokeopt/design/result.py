@@ -86,6 +86,8 @@ class Design:
     notes: list[str] = field(default_factory=list)
     motor_spec: Any = field(default=None, repr=False)  # the ServoMotor
     settings: Any = field(default=None, repr=False)  # the DesignSettings it was solved with
+    #: the handover accuracy was held in its solve (a min_time warm-started from it holds it from the start)
+    accuracy_enforced: bool = field(default=False, repr=False)
     #: the design re-simulated in its contact model and judged (contact/verify.py ``design_verification``), or None
     verification: dict | None = None
     #: the free model parameters found ([design.free], design/free.py): one row each

@@ -82,6 +82,9 @@ class DesignSettings:
     enforce_pull_out: bool = True
     torque_reserve: float = 0.0
     jerk_law_spm: float | None = None
+    #: min_time: the relative width of a bracket of rates at which a rate that never settled is capped at its lower
+    #: end (refine.solve_free_time; not a file field: the trade-off, which reports on a 10 spm grid, widens it)
+    rate_bracket: float = 4e-3
 
     @property
     def mesh(self) -> Mesh:

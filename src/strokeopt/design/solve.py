@@ -43,7 +43,7 @@ from .limits import DRIVE_LIMITS, ENFORCED_CHECKS, MOVE_LIMITS, enforced_checks
 from .nlp import prepare
 from .objectives import OBJECTIVES, TORQUE_OBJECTIVES, free_time, needs_drive_error, unknown_objective_error
 from .parts import choose_parts
-from .refine import RATE_BRACKET, RATE_TOLERANCE, Outcome, solve_one
+from .refine import RATE_TOLERANCE, Outcome, solve_one
 from .request import DriveChoice, DriveSetup, SolveRequest
 from .result import Design, stroke_from_solutions
 from .settings import DesignSettings
@@ -79,14 +79,17 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     mesh = mesh or settings.mesh
     warm = warm_start.solutions if isinstance(warm_start, Design) else warm_start
     radius0 = warm_start.radius if isinstance(warm_start, Design) else None
-    options = _solver_options(settings, solver_options, verbose, free_time(objective))
+    options = _solver_options(settings, solver_options, verbose)
     drive = DriveSetup(problem, settings) if getattr(problem, "drive", None) is not None else None
     if drive is None and objective in TORQUE_OBJECTIVES:
         raise needs_drive_error(problem, objective)
     if drive is not None:
         _check_fixed_accuracy(problem, settings, terms)
+    # a min_time warm-started from a design that held its accuracy holds it from the first solve: the rate a
+    # solve without it finds is the one the accuracy then pulls back from (continuation, servo/tradeoff.py)
+    held = free_time(objective) and bool(getattr(warm_start, "accuracy_enforced", False))
     req = SolveRequest(problem, spm, settings, mesh, objective, drive, None, options, warm, radius0,
-                       error_terms=terms)
+                       error_terms=terms, enforce_accuracy=held)
     t_start = time.perf_counter()
     notes: list[str] = []
     if drive is None:
@@ -115,6 +118,7 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
                     motor=None if motor is None else motor.name, notes=notes)
     design.motor_spec = motor
     design.settings = settings
+    design.accuracy_enforced = bool(nlp.request.enforce_accuracy and terms)
     design.free_parameters = free
     for row in free:
         design.notes.append(f"free model parameter {row['parameter']} = {row['value']:.5g} (bounds {row['lower']:g} "
@@ -175,7 +179,7 @@ def _rate_note(design: Design, best: Outcome) -> str:
     binding = [name for name in design.active_constraints if not name.startswith("handover position")]
     if best.nlp.request.rate_cap:  # a bracket of rates: just above, the design's numbers at that rate fail
         binding = [n for n in binding if n != "handover accuracy"]
-        binding.insert(0, f"handover accuracy (bracketed within {100 * RATE_BRACKET:g} %: a little faster, no "
+        binding.insert(0, f"handover accuracy (bracketed within {100 * best.nlp.request.settings.rate_bracket:g} %: a little faster, no "
                           "design meets it with the error term taken at its own rate)")
     return (f"highest stitch rate {design.spm:.1f} spm (stitch period {60e3 / design.spm:.3f} ms), bound by: "
             f"{'; '.join(binding) or 'no limit (the time scale reached its bound)'}; the rate settled within "

@@ -124,18 +124,17 @@ def _option_names(plugin: str) -> list[str]:
     return names
 
 
-#: The iteration limit of a free cycle time (``min_time``): from a rate far from the highest, IPOPT takes short
-#: steps while the time scale moves (the contact design without a jerk bound: 420 -> 483.7 spm needed more
-#: than 200 iterations, and converged within this limit in 4.3 s). Infeasible problems end in the diagnosis.
-FREE_TIME_MAX_ITER = 1500
+#: Iterations of a continued solve: IPOPT stopped at its iteration limit on a feasible iterate, still on its way
+#: (the contact design's min_time without a jerk bound, 420 -> 483.7 spm: more than 200 iterations, converged
+#: within this). An infeasible iterate at the limit is not continued: the diagnosis names the limit.
+CONTINUE_MAX_ITER = 1500
+#: The largest constraint violation of an iterate that counts as feasible for a continued solve.
+CONTINUE_INF_PR = 1e-6
 
 
-def solver_options(settings, extra: dict | None, verbose: bool, free_time: bool = False) -> dict:
-    """The options of a solve: the defaults (:data:`FREE_TIME_MAX_ITER` for a free cycle time), ``--verbose``,
-    ``[design.solver]``, then ``extra``."""
+def solver_options(settings, extra: dict | None, verbose: bool) -> dict:
+    """The options of a solve: the defaults, ``--verbose``, ``[design.solver]``, then ``extra``."""
     opts = dict(DEFAULT_SOLVER_OPTIONS)
-    if free_time:
-        opts["ipopt.max_iter"] = FREE_TIME_MAX_ITER
     if verbose:
         opts.update({"ipopt.print_level": 5, "print_time": True})
         opts.pop("ipopt.sb", None)
@@ -146,7 +145,19 @@ def solver_options(settings, extra: dict | None, verbose: bool, free_time: bool 
 
 def solve_nlp(nlp, options: dict):
     """Solve ``nlp`` (:class:`~.nlp.Nlp`); the solver (CasADi's costly derivative generation) is built once per
-    structure and options."""
+    structure and options. A solve that stops at IPOPT's iteration limit on a feasible iterate is continued
+    from there once, with :data:`CONTINUE_MAX_ITER` iterations."""
+    sol, stats, solver = _solve(nlp, options)
+    if options.get("plugin", "ipopt") == "ipopt" and stats.get("return_status") == "Maximum_Iterations_Exceeded":
+        inf_pr = (stats.get("iterations") or {}).get("inf_pr") or [np.inf]
+        if inf_pr[-1] <= CONTINUE_INF_PR and options.get("ipopt.max_iter", 0) < CONTINUE_MAX_ITER:
+            more = {**options, "ipopt.max_iter": CONTINUE_MAX_ITER}
+            sol, stats2, solver = _solve(nlp, more, x0=np.asarray(sol["x"]).ravel())
+            stats = {**stats2, "iter_count": int(stats.get("iter_count", 0)) + int(stats2.get("iter_count", 0))}
+    return sol, stats, solver
+
+
+def _solve(nlp, options: dict, x0=None):
     g = nlp.graph
     b = g.built
     opts = dict(options)
@@ -168,7 +179,7 @@ def solve_nlp(nlp, options: dict):
         solver = ca.nlpsol("design", plugin, {"x": w, "f": g.f, "g": gs, "p": p}, opts)
         g.solvers[key] = solver
     nums = nlp.numbers
-    args = dict(x0=nums.x0, lbx=nums.lbx, ubx=nums.ubx, lbg=nums.lbg, ubg=nums.ubg, p=nums.p)
+    args = dict(x0=nums.x0 if x0 is None else x0, lbx=nums.lbx, ubx=nums.ubx, lbg=nums.lbg, ubg=nums.ubg, p=nums.p)
     if plugin == "bonmin" and not options.get("ipopt.print_level", 0):
         with stdout_to(None):  # Bonmin's branch-and-bound log ignores its log-level options
             sol = solver(**args)

@@ -143,6 +143,14 @@ CONFIRM_TRIALS = 6
 #: (``[design] torque_reserve_pct``) and is solved again; the margin added to each step.
 RESERVE_STEPS = 2
 RESERVE_MARGIN = 2e-3
+#: The bracket of rates at which ``min_time`` stops halving (``DesignSettings.rate_bracket``): about the
+#: resolution of the answer (10 spm at 600-900 spm); the confirming search tries the grid rates below it.
+RATE_BRACKET = 1e-2
+#: The step down after a trial rate without a design (its most accurate stroke misses the accuracy there).
+NO_DESIGN_STEP = 0.95
+#: The objective of the confirming search's designs: at each trial rate the most accurate stroke (its term
+#: minimised), so the search asks whether *a* stroke meets the accuracy there; one solve, no pinned torques.
+SEARCH_OBJECTIVE = "min_handover_error"
 #: Consecutive trial rates without a design (the design's own error term cannot meet the accuracy
 #: there) after which the confirming search gives up: lower rates do not help once the error is
 #: set by the table, the encoder and the belt's vibration rather than by the speed.
@@ -222,7 +230,8 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
     confirmed, prev_acc = None, None  # the latest confirmed trial and its accuracy
     for acc in sorted(accuracies, reverse=True):
         # the same drive as the classic law: the problem's motor and pulley
-        settings = replace(base, accuracy=acc, motor_choice="fixed", pulley="fixed", torque_reserve=reserve)
+        settings = replace(base, accuracy=acc, motor_choice="fixed", pulley="fixed", torque_reserve=reserve,
+                           rate_bracket=RATE_BRACKET)
         tag = f"optimal {acc * 1e3:g} mm"
         if ceiling is not None and ceiling <= 0.0:
             points[acc] = TradeoffPoint(acc, "optimal", None, "handover_accuracy", None,
@@ -251,7 +260,7 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
             if hi.ok or not res.torque_limited or res.handover_error > acc:
                 break
             # the loop's torque command passes the limit the rigid load meets: keep the excess in reserve
-            reserve = 1.0 - (1.0 - reserve) * res.torque_limit / res.peak_torque_command * (1.0 - RESERVE_MARGIN)
+            reserve = _more_reserve(reserve, res)
             settings = replace(settings, torque_reserve=reserve)
             try:
                 d = solve_design(problem, objective="min_time", spm=d.spm, settings=settings, warm_start=d)
@@ -282,48 +291,75 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
     return [points[a] for a in accuracies]
 
 
+def _more_reserve(reserve: float, res) -> float:
+    """The torque reserve that leaves the servo's torque command of ``res`` (an accuracy result) within its limit."""
+    return 1.0 - (1.0 - reserve) * res.torque_limit / res.peak_torque_command * (1.0 - RESERVE_MARGIN)
+
+
 def _search_below(problem, hi: _Trial, settings, acc: float, resolution: float, lowest: float, warm, say):
-    """The highest rate below the rejected ``hi`` whose design (the file's objective at that rate) the full
-    simulation confirms: a step down by the simulation's excess (torque and error grow about with the
-    square of the rate), then a secant through the latest two trials, kept inside the bracket of the
-    confirmed and the rejected rate (else its middle), until the bracket is half the resolution."""
+    """The highest rate below the rejected ``hi`` whose design (:data:`SEARCH_OBJECTIVE` at that rate) the full
+    simulation confirms, on the grid of the resolution (the answer is reported on it): first the grid rate just
+    below ``hi``, then steps down by the simulation's excess (torque and error grow about with the square of
+    the rate), then a secant through the
+    latest two trials, kept inside the bracket of the confirmed and the rejected rate (else its middle), each
+    trial rounded to a grid rate inside the bracket, until no grid rate is left between them."""
     from ..design.solve import solve_design
 
     def trial(spm: float) -> _Trial:
-        nonlocal warm
-        try:
-            d = solve_design(problem, spm=spm, settings=settings, warm_start=warm)
-        except SolverError as exc:
-            say(f"{spm:.1f} spm: no design ({exc.reason.splitlines()[0]})")
-            return _Trial(spm, math.inf, exc.reason)
-        warm = d
-        t = _confirm(problem, d, spm, acc)
+        nonlocal warm, settings
+        for _ in range(1 + RESERVE_STEPS):
+            try:
+                d = solve_design(problem, objective=SEARCH_OBJECTIVE, spm=spm, settings=settings, warm_start=warm)
+            except SolverError as exc:
+                say(f"{spm:.1f} spm: no design ({exc.reason.splitlines()[0]})")
+                return _Trial(spm, math.inf, exc.reason)
+            warm = d
+            t = _confirm(problem, d, spm, acc)
+            res = t.result
+            if t.ok or not res.torque_limited or res.handover_error > acc:
+                break
+            # the loop's torque command passes the limit the rigid load meets: more in reserve, here and above
+            settings = replace(settings, torque_reserve=_more_reserve(settings.torque_reserve, res))
+            say(f"{spm:.1f} spm: {t.reason}; again with {100 * settings.torque_reserve:.1f} % of the torque limit "
+                "in reserve")
         say(f"{spm:.1f} spm: " + ("confirmed" if t.ok else t.reason))
         return t
 
     def step_down(t: _Trial) -> float:
-        factor = 1.0 / math.sqrt(1.0 + t.excess) if math.isfinite(t.excess) else 1 / 1.25
+        factor = 1.0 / math.sqrt(1.0 + t.excess) if math.isfinite(t.excess) else NO_DESIGN_STEP
         return t.spm * min(factor, 1.0 - CONFIRM_TOLERANCE)
 
+    def on_grid(x: float, floor: float) -> float | None:
+        """The grid rate nearest ``x`` strictly between ``floor`` and the rejected rate (None: none is left)."""
+        first = math.floor(floor / resolution + 1e-9) + 1
+        last = math.ceil(hi.spm / resolution - 1e-9) - 1
+        if last < first:
+            return None
+        return resolution * min(max(round(x / resolution), first), last)
+
     lo, trials, no_design = None, 0, 0
-    x = step_down(hi)
+    x = on_grid(hi.spm, lowest - resolution)  # the most accurate stroke may meet it just below the rejected one
     while lo is None:
-        if x < lowest or trials >= CONFIRM_TRIALS or no_design >= NO_DESIGN_TRIALS:
+        if x is None or x < lowest or trials >= CONFIRM_TRIALS or no_design >= NO_DESIGN_TRIALS:
             return None
         t, trials = trial(x), trials + 1
         no_design = no_design + 1 if t.design is None else 0
         if t.ok:
             lo = t
         else:
-            hi, x = t, step_down(t)
+            hi = t
+            x = on_grid(min(step_down(t), t.spm - resolution), lowest - resolution)
     last = [hi, lo]  # the two latest finite trials: a secant through them, kept inside the bracket
-    while hi.spm - lo.spm > resolution / 2 and trials < CONFIRM_TRIALS:
+    while trials < CONFIRM_TRIALS:
         a, b = last[-2], last[-1]
         mid = 0.5 * (lo.spm + hi.spm)
         x = (b.spm - b.excess * (b.spm - a.spm) / (b.excess - a.excess)
              if math.isfinite(a.excess) and b.excess != a.excess else mid)
-        if not lo.spm + resolution / 4 <= x <= hi.spm - resolution / 4:
+        if not lo.spm < x < hi.spm:
             x = mid
+        x = on_grid(x, lo.spm)
+        if x is None:
+            break
         t, trials = trial(x), trials + 1
         if t.ok:
             lo = t
