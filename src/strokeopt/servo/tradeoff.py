@@ -371,8 +371,7 @@ def _search_below(problem, hi: _Trial, settings, acc: float, resolution: float, 
 
 
 def tradeoff_optimal_bisection(problem, accuracies=None, *, resolution: float = 10.0, lowest: float = 100.0,
-                               start: float | None = None, progress=None,
-                               objective: str | None = None) -> list[TradeoffPoint]:
+                     start: float | None = None, progress=None) -> list[TradeoffPoint]:
     """Highest stitch rate with the optimal stroke by bisection (the reference of
     :func:`tradeoff_optimal`, kept for the tests): ``design.solve_design`` with the handover
     accuracy constraint, which includes :class:`.kernel.ServoErrorTerm`, for each accuracy [m].
@@ -407,7 +406,7 @@ def tradeoff_optimal_bisection(problem, accuracies=None, *, resolution: float = 
         def ok(spm, settings=settings, acc=acc):
             nonlocal warm
             try:
-                d = solve_design(problem, objective=objective, spm=spm, settings=settings, warm_start=warm)
+                d = solve_design(problem, spm=spm, settings=settings, warm_start=warm)
             except SolverError as exc:
                 reasons[round(spm, 6)] = exc.reason
                 return False
