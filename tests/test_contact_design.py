@@ -125,6 +125,15 @@ def test_jerk_bound_of_the_law_at_a_stated_rate(write_problem, capsys):
         assert words in str(err.value)
 
 
+def test_a_jerk_bound_below_any_rest_to_rest_move_is_named(write_problem):
+    # jerk_max_from_law = 1: the law's jerk at 1 spm, 2e8 times below the move's least (32 h / T^3); the relaxed
+    # diagnosis cannot solve so large an excess and said "check the timing and the rest conditions"
+    problem, _ = contact_problem(write_problem, 'keep_closed = ["c21"]', ["design.jerk_max_from_law=1"])
+    with pytest.raises(SolverError) as err:
+        solve_design(problem, spm=600)
+    assert str(err.value).startswith("move 1 too short at 600 spm: jerk bound needs at least 1.106e+05 m/s^3")
+
+
 @pytest.mark.slow  # one solve and one simulation
 def test_keep_closed_holds_between_the_nodes_up_to_the_stop(write_problem):
     # 450 spm with a jerk bound of 2.5e5 m/s^3: an interval that reaches the stop was held only at its nodes

@@ -30,6 +30,9 @@ def diagnose(req: SolveRequest, status: str) -> SolverError:
     except (RuntimeError, ValueError) as exc:  # pragma: no cover - a relaxed problem is always feasible
         return SolverError(f"the design problem at {spm:g} spm{where} could not be solved (IPOPT: {status}; {exc})")
     if str(stats.get("return_status")) not in STATUS_OK:
+        short = jerk_shortfall(req)  # a jerk bound far below any stroke's (its relaxation too large to solve)
+        if short is not None:
+            return SolverError(short)
         return SolverError(f"the design problem at {spm:g} spm{where} could not be solved (IPOPT: {status}); "
                            f"even with every limit relaxed: check the timing and the rest conditions")
     x = np.asarray(sol["x"]).ravel()
@@ -74,3 +77,21 @@ def need_text(lim: LimitGroup, need: float, name: str) -> str:
         shown_need, shown_lim, unit = need * 1e3, lim.limit * 1e3, "mm"
     unit = "" if unit == "-" else f" {unit}"
     return f"{name} needs {shown_need:.4g}{unit}, limit {shown_lim:.4g}{unit}{over}"
+
+
+#: The least peak jerk of a move at rest at both ends in velocity and acceleration: ``32 h / T^3`` (jerk
+#: +J, -J, -J, +J for a quarter of the move each); a bound below it leaves the move no stroke.
+REST_TO_REST_JERK = 32.0
+
+
+def jerk_shortfall(req: SolveRequest) -> str | None:
+    """The first move whose jerk bound no stroke at rest at both ends meets, in the diagnosis's words (None: none)."""
+    if req.settings.rest_order < 2:
+        return None
+    for mv in req.moves:
+        need = REST_TO_REST_JERK * abs(mv.stroke) / mv.duration**3
+        if mv.jerk_bound is not None and mv.jerk_bound < need * (1 - 1e-9):
+            return (f"move {mv.index} too short at {req.spm:g} spm: jerk bound needs at least {need:.4g} m/s^3 "
+                    f"(32 h / T^3 for {abs(mv.stroke) * 1e3:g} mm in {mv.duration * 1e3:.4g} ms at rest at both ends), "
+                    f"limit {mv.jerk_bound:.4g} m/s^3 ({100 * (need / mv.jerk_bound - 1):.4g} % over)")
+    return None
