@@ -220,9 +220,11 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
             violated = not enforce and error > settings.accuracy
             if violated and needs_terms(req.objective):  # the least error there is: no stroke meets the accuracy
                 motor = f" for motor {choice.motor.name}" if choice is not None and choice.motor is not None else ""
-                raise SolverError(f"the design cannot meet the limits{motor} at {nlp.request.spm:g} spm: handover "
-                                  f"accuracy needs {error * 1e3:.4g} mm (the most accurate stroke), limit "
-                                  f"{settings.accuracy * 1e3:.4g} mm ({100 * (error / settings.accuracy - 1):.1f} % over)")
+                short = (f"handover accuracy needs {error * 1e3:.4g} mm (the most accurate stroke), limit "
+                         f"{settings.accuracy * 1e3:.4g} mm ({100 * (error / settings.accuracy - 1):.1f} % over)")
+                err = SolverError(f"the design cannot meet the limits{motor} at {nlp.request.spm:g} spm: {short}")
+                err.excess, err.short = error / settings.accuracy - 1, short  # as diagnose's: ranks the motors
+                raise err
             if not violated and pins_in_place(nlp, x, new):
                 break
             held = (nlp, sol, x, sols, status) if not violated else None

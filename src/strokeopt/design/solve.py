@@ -41,7 +41,8 @@ from .fine_grid import move_results
 from .free import free_overrides, free_report
 from .limits import DRIVE_LIMITS, ENFORCED_CHECKS, MOVE_LIMITS, enforced_checks
 from .nlp import prepare
-from .objectives import OBJECTIVES, TORQUE_OBJECTIVES, free_time, needs_drive_error, unknown_objective_error
+from .objectives import (OBJECTIVES, TORQUE_OBJECTIVES, free_time, needs_drive_error, needs_terms,
+                         unknown_objective_error)
 from .parts import choose_parts
 from .refine import RATE_TOLERANCE, Outcome, solve_one
 from .request import DriveChoice, DriveSetup, SolveRequest
@@ -85,6 +86,11 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
         raise needs_drive_error(problem, objective)
     if drive is not None:
         _check_fixed_accuracy(problem, settings, terms)
+        if needs_terms(objective) and (settings.motor_choice != "fixed" or (
+                settings.pulley != "fixed" and drive.own_transmission is None)):
+            raise ProblemError(str(problem.file), "design.objective", f"{objective} compares strokes on one drive (the "
+                               "servo's error term is exact for a fixed motor and pulley only): give --motor and "
+                               "--pulley-teeth, or design.motor_choice = \"fixed\" and design.pulley = \"fixed\"")
     # a min_time warm-started from a design that held its accuracy holds it from the first solve: the rate a
     # solve without it finds is the one the accuracy then pulls back from (continuation, servo/tradeoff.py)
     held = free_time(objective) and bool(getattr(warm_start, "accuracy_enforced", False))

@@ -118,7 +118,7 @@ def design_text(design: Design, comparison: list[dict] | None = None) -> str:
         lines.append(f"motor {design.motor}; pulley {_pulley_text(design)}" + (
             "" if design.pitch_diameter is None else f", pitch diameter {design.pitch_diameter * 1e3:.2f} mm"))
     lines.append("")
-    lines.append(format_table([{**m.to_dict(), "duration_ms": m.duration * 1e3} for m in design.moves],
+    lines.append(format_table([{**m.to_dict(), "duration_ms": f"{m.duration * 1e3:.3f}"} for m in design.moves],
                               [("index", "move"), ("name", "interval"), ("stroke_mm", "stroke mm"),
                                ("direction", "direction"),
                                ("duration_ms", "move time ms"), ("v_max_m_s", "|v| max m/s"), ("a_max_m_s2", "|a| max m/s2"),
@@ -150,7 +150,8 @@ def design_text(design: Design, comparison: list[dict] | None = None) -> str:
                                                    ("rms_torque_N_m", "RMS torque N m"),
                                                    ("pull_out_pct", "pull-out %"), ("step_rate_Hz", "step rate Hz"))
                      if key in comparison[0]]
-        cols.append(("vs_optimal_pct", f"{design.objective} vs optimal %"))
+        if any(r.get("vs_optimal_pct") is not None for r in comparison):  # min_time, min_handover_error: none
+            cols.append(("vs_optimal_pct", f"{design.objective} vs optimal %"))
         cols.append(("feasible_text", "feasible"))
         lines.append("")
         motor = f" with {design.motor}, {_pulley_text(design)}" if design.motor else ""

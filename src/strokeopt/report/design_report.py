@@ -190,7 +190,8 @@ def comparison_table(comparison: list[dict], objective: str, prefix: str = "comp
     if comparison and "peak_torque_N_m" in comparison[0]:
         cols += [("peak_torque_N_m", "peak torque N m"), ("rms_torque_N_m", "RMS torque N m"),
                  ("peak_speed_rpm", "peak speed rpm")]
-    cols.append(("vs_optimal_pct", f"{objective} vs optimal %"))
+    if any(r.get("vs_optimal_pct") is not None for r in comparison):  # min_time, min_handover_error: none
+        cols.append(("vs_optimal_pct", f"{objective} vs optimal %"))
     rows = []
     for i, r in enumerate(comparison):
         rows.append([h.cell(r["law"])] + [h.cell(r.get(k), f"{prefix}[{i}].{k}") for k, _ in cols]

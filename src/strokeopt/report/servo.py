@@ -126,7 +126,7 @@ def tradeoff_text(report: dict) -> str:
             f"rates to {report['resolution_spm']:g} spm)\n{report['torque_basis']}")
     return head + "\n\n" + format_table(report["points"], [
         ("accuracy_mm", "accuracy mm"), ("stroke", "stroke"), ("max_spm", "max spm"), ("binding", "binding limit"),
-        ("handover_error_mm", "error at max mm")])
+        ("confirmed_spm", "simulated at spm"), ("handover_error_mm", "error there mm")])
 
 
 def _words(name: str) -> str:

@@ -33,12 +33,15 @@ class TradeoffPoint:
     stroke: str  # "modified_sine" (the problem's law) or "optimal"
     max_spm: float | None
     binding: str
-    handover_error: float | None = None  # m, at max_spm
+    handover_error: float | None = None  # m, at confirmed_spm
     detail: str = ""
+    #: the rate the full simulation confirmed (max_spm is it rounded down to the resolution; None: max_spm)
+    confirmed_spm: float | None = None
 
     def as_dict(self) -> dict:
-        return {"accuracy_mm": self.accuracy * 1e3, "stroke": self.stroke, "max_spm": self.max_spm,
-                "binding": self.binding,
+        confirmed = self.max_spm if self.confirmed_spm is None else self.confirmed_spm
+        return {"accuracy_mm": round(self.accuracy * 1e3, 9), "stroke": self.stroke, "max_spm": self.max_spm,
+                "binding": self.binding, "confirmed_spm": None if confirmed is None else round(confirmed, 1),
                 "handover_error_mm": None if self.handover_error is None else self.handover_error * 1e3,
                 "detail": self.detail}
 
@@ -274,20 +277,20 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
         if hi.ok:
             found, lo = top, hi
         else:
-            lo = _search_below(problem, hi, settings, acc, resolution, lowest, warm, lambda text: say(tag, text))
+            lo, hi = _search_below(problem, hi, settings, acc, resolution, lowest, warm, lambda text: say(tag, text))
             found = None if lo is None else lo.spm
-            binding = _binding_of(hi.reason)
+            binding = _binding_of(hi.reason)  # what fails just above the highest confirmed rate
         if found is None:
-            points[acc] = TradeoffPoint(acc, "optimal", None, binding, None, hi.reason)
+            points[acc] = TradeoffPoint(acc, "optimal", None, binding, None, f"at {hi.spm:.1f} spm: {hi.reason}")
             ceiling = 0.0
             continue
         max_spm = math.floor(found / resolution + 1e-9) * resolution
         error = lo.result.handover_error
         detail = (f"min_time {d.spm:.1f} spm; at {found:.1f} spm the full simulation gives {error * 1e3:.4f} mm"
-                  + ("" if hi.ok else f"; above: {hi.reason}"))
-        points[acc] = TradeoffPoint(acc, "optimal", max_spm, binding, error, detail)
+                  + ("" if hi.ok else f"; above, at {hi.spm:.1f} spm: {hi.reason}"))
+        points[acc] = TradeoffPoint(acc, "optimal", max_spm, binding, error, detail, confirmed_spm=found)
         ceiling, confirmed, prev_acc = found, lo, acc
-        say(tag, f"{found:.1f} spm confirmed ({error * 1e3:.4f} mm)")
+        say(tag, f"the highest confirmed rate: {found:.1f} spm ({error * 1e3:.4f} mm)")
     return [points[a] for a in accuracies]
 
 
@@ -302,7 +305,8 @@ def _search_below(problem, hi: _Trial, settings, acc: float, resolution: float, 
     below ``hi``, then steps down by the simulation's excess (torque and error grow about with the square of
     the rate), then a secant through the
     latest two trials, kept inside the bracket of the confirmed and the rejected rate (else its middle), each
-    trial rounded to a grid rate inside the bracket, until no grid rate is left between them."""
+    trial rounded to a grid rate inside the bracket, until no grid rate is left between them. Returns the
+    confirmed trial (None: none) and the lowest rejected one above it."""
     from ..design.solve import solve_design
 
     def trial(spm: float) -> _Trial:
@@ -341,7 +345,7 @@ def _search_below(problem, hi: _Trial, settings, acc: float, resolution: float, 
     x = on_grid(hi.spm, lowest - resolution)  # the most accurate stroke may meet it just below the rejected one
     while lo is None:
         if x is None or x < lowest or trials >= CONFIRM_TRIALS or no_design >= NO_DESIGN_TRIALS:
-            return None
+            return None, hi
         t, trials = trial(x), trials + 1
         no_design = no_design + 1 if t.design is None else 0
         if t.ok:
@@ -367,7 +371,7 @@ def _search_below(problem, hi: _Trial, settings, acc: float, resolution: float, 
             hi = t
         if math.isfinite(t.excess):
             last.append(t)
-    return lo
+    return lo, hi
 
 
 def tradeoff_optimal_bisection(problem, accuracies=None, *, resolution: float = 10.0, lowest: float = 100.0,
