@@ -154,9 +154,10 @@ NO_DESIGN_STEP = 0.95
 #: The objective of the confirming search's designs: at each trial rate the most accurate stroke (its term
 #: minimised), so the search asks whether *a* stroke meets the accuracy there; one solve, no pinned torques.
 SEARCH_OBJECTIVE = "min_handover_error"
-#: Consecutive trial rates without a design (the design's own error term cannot meet the accuracy
-#: there) after which the confirming search gives up: lower rates do not help once the error is
-#: set by the table, the encoder and the belt's vibration rather than by the speed.
+#: Consecutive hopeless trial rates (no design: the most accurate stroke's term misses the accuracy there; or
+#: a simulated error no smaller than at the rate above) after which the confirming search gives up: lower
+#: rates do not help once the error is set by the table, the encoder and the belt's vibration rather than by
+#: the speed.
 NO_DESIGN_TRIALS = 2
 
 
@@ -347,7 +348,8 @@ def _search_below(problem, hi: _Trial, settings, acc: float, resolution: float, 
         if x is None or x < lowest or trials >= CONFIRM_TRIALS or no_design >= NO_DESIGN_TRIALS:
             return None, hi
         t, trials = trial(x), trials + 1
-        no_design = no_design + 1 if t.design is None else 0
+        hopeless = t.design is None or (not t.ok and math.isfinite(hi.excess) and t.excess >= hi.excess)
+        no_design = no_design + 1 if hopeless else 0
         if t.ok:
             lo = t
         else:
