@@ -89,7 +89,7 @@ def test_min_time_reference_drive_is_the_feasibility_boundary(reference):
 def test_min_time_settles_where_the_handover_accuracy_binds(reference):
     # 0.05 mm on the thesis drive: the servo term's numbers are frozen at each trial rate, and the rates
     # jumped about (677.7, 609.4, 619.0, 613.6, 669.1, ...) until "did not settle within 8 re-solves";
-    # the bracket of rates ends within RATE_BRACKET, the design term held at the rate it reports
+    # the bracket of rates ends within DesignSettings.rate_bracket, the design term held at the rate it reports
     settings = replace(reference.design, accuracy=0.05e-3, motor_choice="fixed", pulley="fixed")
     fast = solve_design(reference, objective="min_time", settings=settings)
     assert 450 < fast.spm < 850

@@ -28,7 +28,6 @@ from .nlp import Nlp, prepare
 from .objectives import TIME_SCALE, free_time, needs_terms
 from .pins import pin_intervals, pin_times, pins_fit
 from .request import SolveRequest
-from .settings import DesignSettings
 from .solver import STATUS_OK, solve_nlp
 from ..errors import SolverError
 
@@ -43,10 +42,6 @@ PIN_SLACK = 0.9
 #: rate below which it has settled.
 RATE_ITERATIONS = 12
 RATE_TOLERANCE = 1e-3
-#: The relative width of a bracket of rates (one solves faster than itself, one slower) at which a rate that
-#: never settled is capped at its lower end (``DesignSettings.rate_bracket``): ``F`` jumps there (the handover
-#: error's phase in the belt's vibration changes with the rate), and halving further costs a solve per halving.
-RATE_BRACKET = DesignSettings.rate_bracket
 
 
 @dataclass
@@ -138,7 +133,8 @@ def solve_free_time(req: SolveRequest) -> Outcome:
     faster than itself (``F(r) > r``) and one that solves slower are known, the next rate is
     ``F(r)``; then the middle of that bracket (a rate without a design counts as too fast): where
     the handover error binds, the error changes with the rate in a way the frozen numbers do not see,
-    ``F`` jumps, and the plain iteration jumps about with it. A bracket narrower than ``settings.rate_bracket`` that never settled
+    ``F`` jumps (the handover error's phase in the belt's vibration changes with the rate), and the plain
+    iteration jumps about with it. A bracket narrower than ``settings.rate_bracket`` that never settled
     (``F`` jumps there) ends in a solve at its lower rate with the rate capped there
     (``rate_cap``). The outcome is read at the last rate (time scale 1: every number exact)."""
     spm, warm, radius0, mesh = req.spm, req.warm, req.radius0, req.mesh
@@ -216,8 +212,8 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
             sols = nlp.unpack(x)
             new = pin_times(nlp.request, nlp.graph.pins, sols)
             total = nlp.graph.handover_total
-            error = float(nlp.value(total, x).item()) if isinstance(total, (ca.MX, ca.SX)) else 0.0
-            violated = not enforce and error > settings.accuracy
+            error = float(nlp.value(total, x).item()) if not enforce and isinstance(total, (ca.MX, ca.SX)) else 0.0
+            violated = error > settings.accuracy  # a lazy accuracy the solution breaks
             if violated and needs_terms(req.objective):  # the least error there is: no stroke meets the accuracy
                 motor = f" for motor {choice.motor.name}" if choice is not None and choice.motor is not None else ""
                 short = (f"handover accuracy needs {error * 1e3:.4g} mm (the most accurate stroke), limit "
