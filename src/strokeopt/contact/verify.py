@@ -108,10 +108,11 @@ def verification(result: SceneResult, lag_max: float | None = None, impact_veloc
         # a criterion without a limit is named with its value, so that "verified" never hides it
         unjudged = [r for r in rows if r["ok"] is None and r["criterion"] not in {c for c, _, _ in reported}
                     and isinstance(r["value"], (int, float)) and not isinstance(r["value"], bool)]
+        fields = ", ".join(LIMIT_FIELDS.get(r["criterion"], r["criterion"]) for r in unjudged)
+        values = ", ".join(f"{r['criterion']} {r['value']:.4g} {r['unit']}" for r in unjudged)
         verdict = (f"verified in scene {result.scene!r} at {result.spm:g} spm: " +
                    (", ".join(judged) + " within limits" if judged else "no criterion to judge") +
-                   (f"; not judged (no [design.contact] {', '.join(LIMIT_FIELDS.get(r['criterion'], r['criterion']) for r in unjudged)}): " + ", ".join(
-                       f"{r['criterion']} {r['value']:.4g} {r['unit']}" for r in unjudged) if unjudged else "") +
+                   (f"; not judged (no [design.contact] {fields}): {values}" if unjudged else "") +
                    ("; " + ", ".join(f"{c} {v:.4g} {u}" for c, v, u in reported) + " (reported)" if reported else ""))
     return {"scene": result.scene, "spm": result.spm, "status": "verification failed" if failed else "ok",
             "criteria": rows, "failed": [r["criterion"] for r in failed], "verdict": verdict}

@@ -185,7 +185,8 @@ def _rate_note(design: Design, best: Outcome) -> str:
     binding = [name for name in design.active_constraints if not name.startswith("handover position")]
     if best.nlp.request.rate_cap:  # a bracket of rates: just above, the design's numbers at that rate fail
         binding = [n for n in binding if n != "handover accuracy"]
-        binding.insert(0, f"handover accuracy (bracketed within {100 * best.nlp.request.settings.rate_bracket:g} %: a little faster, no "
+        bracket = best.nlp.request.settings.rate_bracket
+        binding.insert(0, f"handover accuracy (bracketed within {100 * bracket:g} %: a little faster, no "
                           "design meets it with the error term taken at its own rate)")
     return (f"highest stitch rate {design.spm:.1f} spm (stitch period {60e3 / design.spm:.3f} ms), bound by: "
             f"{'; '.join(binding) or 'no limit (the time scale reached its bound)'}; the rate settled within "

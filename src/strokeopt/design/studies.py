@@ -123,23 +123,7 @@ def impact_study(problem, velocities, *, objective: str | None = None, spm: floa
         limited = replace(settings, contact=replace(settings.contact, impact_velocity_max=vmax))
         row = {"impact_velocity_max_m_s": vmax}
         try:
-            try:
-                d = solve_design(problem, objective=objective, spm=spm, settings=limited, warm_start=warm,
-                                 error_terms=error_terms)
-            except SolverError:
-                if warm is None:
-                    raise
-                # the previous limit's stroke may start IPOPT where it cannot restore feasibility: start afresh
-                d = solve_design(problem, objective=objective, spm=spm, settings=limited, error_terms=error_terms)
-            else:
-                if warm is not None and d.status == "limits exceeded":  # the same, for a solve that ended short
-                    try:
-                        fresh = solve_design(problem, objective=objective, spm=spm, settings=limited,
-                                             error_terms=error_terms)
-                    except SolverError:
-                        fresh = None
-                    if fresh is not None and fresh.status != "limits exceeded":
-                        d = fresh
+            d = _solved_afresh_if_short(problem, objective, spm, limited, warm, error_terms)
         except SolverError as exc:
             rows.append({**row, "feasible": False, "reason": exc.reason.splitlines()[0],
                          "solve_time_s": time.perf_counter() - t0})
@@ -159,3 +143,24 @@ def impact_study(problem, velocities, *, objective: str | None = None, spm: floa
             row["reason"] = d.notes[0]
         rows.append(row)
     return sorted(rows, key=lambda r: r["impact_velocity_max_m_s"])
+
+
+def _solved_afresh_if_short(problem, objective, spm, settings, warm, error_terms):
+    """The design warm-started from ``warm``; where that fails or ends short of a limit (the previous limit's
+    stroke may start IPOPT where it cannot restore feasibility), solved afresh, kept if it does better."""
+    warmed = None
+    try:
+        warmed = solve_design(problem, objective=objective, spm=spm, settings=settings, warm_start=warm,
+                              error_terms=error_terms)
+    except SolverError:
+        if warm is None:
+            raise
+    if warmed is not None and (warm is None or warmed.status != "limits exceeded"):
+        return warmed
+    try:
+        fresh = solve_design(problem, objective=objective, spm=spm, settings=settings, error_terms=error_terms)
+    except SolverError:
+        if warmed is None:
+            raise
+        return warmed
+    return fresh if warmed is None or fresh.status != "limits exceeded" else warmed
