@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from strokeopt.cli.main import main
-from strokeopt.io.design_file import read_design
-from strokeopt.io.ranges import parse_cam_resolution
+from strokeopt.files.design_file import read_design
+from strokeopt.files.ranges import parse_cam_resolution
 from strokeopt.errors import ProblemError
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -8,6 +8,7 @@ import pytest
 
 from strokeopt.cli.main import main
 from strokeopt.cli.parser import build_parser
+from strokeopt.files.design_file import write_design
 
 
 def test_accuracy_json_and_plot(capsys, reference_path, tmp_path):
@@ -138,7 +139,7 @@ def test_accuracy_with_an_optimal_design(capsys, reference, reference_path, tmp_
 
     settings = replace(reference.design or DesignSettings(), motor_choice="fixed", pulley="fixed", mesh_intervals=20)
     design = solve_design(reference, spm=600, settings=settings)
-    design.write(tmp_path)
+    write_design(design, tmp_path)
     path = tmp_path / "design.json"
     assert main(["accuracy", str(reference_path), "--design", str(path), "--json", "--plot", "none"]) == 0
     data = json.loads(capsys.readouterr().out)
@@ -158,13 +159,13 @@ def test_accuracy_uses_the_drive_of_the_design(capsys, reference_path, tmp_path)
 
     from strokeopt.design.settings import DesignSettings
     from strokeopt.design.solve import solve_design
-    from strokeopt.io.design_file import read_design
-    from strokeopt.io.problem_file import load_problem
+    from strokeopt.files.design_file import read_design
+    from strokeopt.files.problem_file import load_problem
     from strokeopt.servo.accuracy import handover_accuracy
 
     z22 = load_problem(reference_path, ["transmission.pulley_teeth=22"])
     settings = replace(z22.design or DesignSettings(), motor_choice="fixed", pulley="fixed", mesh_intervals=20)
-    solve_design(z22, spm=600, settings=settings).write(tmp_path)
+    write_design(solve_design(z22, spm=600, settings=settings), tmp_path)
     path = tmp_path / "design.json"
     assert main(["accuracy", str(reference_path), "--design", str(path), "--json", "--plot", "none"]) == 0
     data = json.loads(capsys.readouterr().out)

@@ -7,6 +7,7 @@ import json
 import pytest
 
 from strokeopt.cli.main import main
+from strokeopt.files.design_file import write_design
 
 
 def test_simulate_json(capsys, reference_path, tmp_path):
@@ -100,7 +101,7 @@ def test_verify_design(capsys, reference_path, tmp_path, monkeypatch):
     from strokeopt.design.solve import solve_design
 
     design = solve_design(load_problem(reference_path), objective="min_jerk", spm=600)
-    path = design.write(tmp_path)[0]
+    path = write_design(design, tmp_path)[0]
     assert main(["verify", str(path), "--scene", "release", "--json", "--plot", "none"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["design"] == str(path) and data["spm"] == 600 and data["stroke"] == "optimal"

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from strokeopt.cli.main import main
-from strokeopt.io.design_file import read_design
+from strokeopt.files.design_file import read_design
 
 ROOT = Path(__file__).resolve().parents[1]
 KNOWN = ROOT / "problems" / "known_optima"

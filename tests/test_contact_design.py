@@ -11,6 +11,7 @@ from strokeopt.cli.main import main
 from conftest import stated_k2
 from strokeopt.contact.cluster import build_cluster
 from strokeopt.design.solve import solve_design
+from strokeopt.files.design_file import write_design
 
 #: the thesis drive (055U2B30 on 28 teeth, thesis 4.6) with the modified sine's jerk bound of the reference file
 THESIS_DRIVE = ['design.motor_choice="fixed"', 'design.pulley="fixed"']
@@ -235,14 +236,16 @@ def test_solve_verifies_itself_and_fails_naming_the_criterion(write_problem, cap
 def test_verify_prints_the_block_and_a_verdict(write_problem, capsys, tmp_path):
     problem, path = contact_problem(write_problem, 'keep_closed = ["c21"]\nmin_contact_force_N = 0.5')
     design = solve_design(problem, spm=380)
-    written = design.write(tmp_path / "d")[0]
+    written = write_design(design, tmp_path / "d")[0]
     code = main(["verify", str(path), "--design", str(written), "--plot", "none"])
     text = capsys.readouterr().out
     assert code == 0 and "verification: the stroke re-simulated in scene 'release'" in text
-    assert "verified in scene 'release' at 380 spm: premature release, lag, handover accuracy within limits" in text
+    # the impact velocity has no limit in this file: never "verified" beside it (it is named, with its value)
+    assert ("checked (1 not judged) in scene 'release' at 380 spm: premature release, lag, handover accuracy "
+            "within limits; not judged (no [design.contact] impact_velocity_max_m_s): impact velocity") in text
     # a design without contact limits at 500 spm lags ~1.7 mm: verify holds it to lag_max_mm, says so, exit 1
     lagging, lag_path = contact_problem(write_problem, "lag_max_mm = 0.05", name="lag.toml")
-    written = solve_design(lagging, spm=500).write(tmp_path / "lag")[0]
+    written = write_design(solve_design(lagging, spm=500), tmp_path / "lag")[0]
     code = main(["verify", str(lag_path), "--design", str(written), "--plot", "none"])
     captured = capsys.readouterr()
     assert code == 1 and "lag" in captured.out and "FAIL" in captured.out

@@ -13,9 +13,10 @@ from strokeopt.design.collocation import Mesh, MoveSolution
 from strokeopt.design.compare import compare_with_laws
 from strokeopt.design.settings import DesignSettings
 from strokeopt.design.solve import solve_design
-from strokeopt.design.studies import fastest_feasible, sweep_design
-from strokeopt.io.design_file import read_design
+from strokeopt.studies.sweeps import fastest_feasible, sweep_design
+from strokeopt.files.design_file import read_design
 from strokeopt.drive.checks import drive_checks
+from strokeopt.files.design_file import write_design
 
 ROOT = Path(__file__).resolve().parents[1]
 KNOWN = ROOT / "problems" / "known_optima"
@@ -185,7 +186,7 @@ def test_comparison_never_shows_an_infeasible_law_as_beating_the_optimum(thesis_
 @pytest.mark.slow
 def test_design_json_round_trip(thesis_drive_600, tmp_path):
     _, design = thesis_drive_600
-    paths = design.write(tmp_path)
+    paths = write_design(design, tmp_path)
     data, stroke = read_design(tmp_path / "design.json")
     assert data["spm"] == 600 and data["problem_file"] == str(REFERENCE)
     assert len(data["cam_table"]["rows"]) == 3600  # 0.1 deg master resolution (sources A.5)

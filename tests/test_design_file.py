@@ -6,6 +6,7 @@ import json
 
 import pytest
 
+from strokeopt.files.design_file import load_design
 from strokeopt import load_problem, verify
 from strokeopt.cli.main import main
 
@@ -34,9 +35,9 @@ def test_verify_uses_the_design_overrides(design_dir, reference_path, capsys):
     assert main(["verify", str(design_dir / "design.json"), "--json", "--plot", "none"]) in (0, 1)
     positional = json.loads(capsys.readouterr().out)["impact_velocity_m_s"]
     # the library path gives the same number, and it is the stiffer spring's (not the file's 900 N/m)
-    lib = verify(str(design_dir / "design.json"), "release").metrics["impact_velocity_m_s"]
+    lib = verify(load_design(design_dir / "design.json"), "release").metrics["impact_velocity_m_s"]
     stock = load_problem(reference_path, ["machine.spm=550"])
-    from strokeopt.io.design_file import read_design
+    from strokeopt.files.design_file import read_design
 
     _, stroke = read_design(design_dir / "design.json")
     from strokeopt import simulate_scene

@@ -86,7 +86,7 @@ def test_design_figure_has_the_torque_speed_panel(reference):
 ])
 def test_unwritable_out_or_plot_is_a_one_line_error_before_any_work(args, option, capsys, reference_path, tmp_path,
                                                                     monkeypatch):
-    import strokeopt.io.problem_file as problem_file
+    import strokeopt.files.problem_file as problem_file
 
     def no_work(*a, **k):
         raise AssertionError("the problem was loaded: the output path was not checked first")
@@ -139,7 +139,7 @@ def test_kinematics_text_names_cam_cycle_stitch_period_and_move_times(capsys, re
 
 
 def test_solve_sweep_table_names_the_solve_time(capsys, reference_path, monkeypatch):
-    import strokeopt.design.studies as studies
+    import strokeopt.studies.sweeps as studies
 
     rows = [{"spm": spm, "feasible": True, "objective_value": v, "motor": "055U2B30", "pulley_teeth": 24,
              "peak_torque_N_m": v, "rms_torque_N_m": v / 2, "solve_time_s": 0.5, "reason": None}

@@ -133,7 +133,7 @@ def test_cli_solve_min_time_json(capsys):
 #: accurate stroke at each grid rate (min_handover_error) and finds higher rates the full simulation confirms.
 @pytest.mark.slow
 def test_tradeoff_min_time_agrees_with_the_bisection(reference):
-    from strokeopt.servo.tradeoff import tradeoff_optimal, tradeoff_optimal_bisection
+    from strokeopt.studies.tradeoff import tradeoff_optimal, tradeoff_optimal_bisection
 
     lines = []
     (new,) = tradeoff_optimal(reference, [0.5e-3], resolution=2, progress=lambda step, text: lines.append(text))
@@ -149,7 +149,7 @@ BISECTION_ACCURACY_BOUND = {0.05e-3: 520.0, 0.1e-3: 850.0}
 
 @pytest.mark.slow  # a min_time continuation over two accuracies, about 20 s
 def test_tradeoff_where_the_accuracy_binds_is_confirmed_and_not_below_the_bisection(reference):
-    from strokeopt.servo.tradeoff import tradeoff_optimal
+    from strokeopt.studies.tradeoff import tradeoff_optimal
 
     points = tradeoff_optimal(reference, sorted(BISECTION_ACCURACY_BOUND))
     for pt in points:

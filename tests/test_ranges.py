@@ -6,7 +6,7 @@ import pytest
 
 from strokeopt import ProblemError
 from strokeopt.cli.main import main
-from strokeopt.io.ranges import parse_spm_range
+from strokeopt.files.ranges import parse_spm_range
 
 
 @pytest.mark.parametrize("text, values", [

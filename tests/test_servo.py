@@ -279,7 +279,7 @@ def test_design_with_the_accuracy_constraint_resimulates_within_it(setup):
 
 
 def test_tradeoff_classic_is_monotone_and_names_its_limit(reference):
-    from strokeopt.servo.tradeoff import tradeoff_classic
+    from strokeopt.studies.tradeoff import tradeoff_classic
 
     pts = tradeoff_classic(reference, [0.03e-3, 0.06e-3, 0.1e-3, 1.0e-3], resolution=40, step=150)
     assert [p.accuracy for p in pts] == sorted(p.accuracy for p in pts)
@@ -296,7 +296,7 @@ def test_tradeoff_classic_is_monotone_and_names_its_limit(reference):
 
 @pytest.mark.slow
 def test_tradeoff_optimal_names_its_limit_and_resimulates(reference):
-    from strokeopt.servo.tradeoff import tradeoff_optimal
+    from strokeopt.studies.tradeoff import tradeoff_optimal
 
     (pt,) = tradeoff_optimal(reference, [0.5e-3], resolution=100, start=800)
     assert pt.stroke == "optimal" and pt.max_spm is not None and pt.max_spm >= 500

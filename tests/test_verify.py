@@ -5,7 +5,8 @@ from __future__ import annotations
 import pytest
 
 from strokeopt import load_problem, simulate_scene
-from strokeopt.contact.verify import DesignStroke, load_design, verify
+from strokeopt.contact.verify import verify
+from strokeopt.files.design_file import DesignStroke, load_design, write_design
 
 KEYS = ("impact_velocity_m_s", "impact_angle_deg", "lag_end_angle_deg", "min_gap_N_mm", "release_angle_deg")
 
@@ -46,7 +47,7 @@ def test_verify_a_solved_design_and_its_file(problem, tmp_path):
     for key in KEYS:
         assert r.metrics[key] == direct.metrics[key], key
     # the design.json route (strokeopt verify) rebuilds the same stroke on the same problem
-    path = design.write(tmp_path)[0]
+    path = write_design(design, tmp_path)[0]
     loaded = load_design(path)
     assert loaded.spm == 600 and loaded.objective == "min_jerk" and loaded.source == str(path)
     again = verify(loaded, "release")

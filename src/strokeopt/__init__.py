@@ -35,25 +35,26 @@ from .design.result import Design
 from .design.settings import DesignSettings
 from .design.compare import compare_with_laws
 from .report.design import design_text
-from .design.studies import mesh_study, sweep_design
-from .io.design_file import read_design
+from .studies.sweeps import mesh_study, sweep_design
+from .files.design_file import read_design
 from .design.solve import solve_design
 from .errors import ProblemError, SolverError, StrokeoptError
 from .motion.laws import LAW_NAMES, Characteristics, MotionLaw, law_table, make_law
 from .contact.model import Body, Element, ForceLaw, Model
 from .problem import Problem
-from .io.problem_file import load_problem
+from .files.problem_file import load_problem
 from .contact.scene import Scene, make_scene
 from .servo.kernel import ServoErrorTerm
 from .servo.accuracy import AccuracyResult, accuracy_report, handover_accuracy
 from .servo.plant import DriveAxis, axis_from_problem
 from .servo.settings import ServoSettings
-from .servo.tradeoff import tradeoff
+from .studies.tradeoff import tradeoff
+from .studies.verified import VerifiedDesign, solve_verified, verify_design
 from .contact.simulate import SceneResult, SimulationOptions, simulate_scene
 from .contact.studies import sweep_spm, tolerance_study
 from .contact.verify import design_verification, verification, verify
 from .contact.cluster import Cluster, build_cluster, softest_stiffness
-from .design.studies import impact_study
+from .studies.sweeps import impact_study
 from .motion.stroke import Kinematics, Piece, StrokeFunction
 from .motion.timing import Interval, TimingDiagram
 from .drive.transmission import BeltPulley, ScrewLever, SliderCrank, Transmission, gt3_pitch_diameter
@@ -69,7 +70,7 @@ __all__ = [
     "OBJECTIVES", "Design", "DesignSettings", "Mesh", "compare_with_laws", "design_text", "mesh_study", "read_design",
     "solve_design", "sweep_design",
     "AccuracyResult", "DriveAxis", "ServoErrorTerm", "ServoSettings", "accuracy_report", "axis_from_problem", "handover_accuracy",
-    "tradeoff",
+    "tradeoff", "VerifiedDesign", "solve_verified", "verify_design",
     "Cluster", "build_cluster", "design_verification", "impact_study", "softest_stiffness", "verification",
 ]
 __version__ = "0.1.0"

@@ -1,19 +1,33 @@
-"""The design problem: one validated, typed object, SI units inside.
+"""The design problem: one validated, typed object, SI units inside, and how parsed data becomes one.
 
-A :class:`Problem` is made by :func:`strokeopt.io.problem_file.load_problem`
-from a problem file; this module holds the object and nothing that reads files.
+:func:`parse_problem` turns the data of a problem file (a dict, after ``extends`` and ``--set``) into a
+:class:`Problem`; each ``[section]`` is read by the reader of the package that owns it (``[drive]`` by
+``drive``, ``[design]`` by ``design``, ...), all through :class:`~strokeopt.io.fields.Fields`.
+:meth:`Problem.with_overrides` makes a variant in memory. Reading files is
+:mod:`strokeopt.files.problem_file`'s (``load_problem``); nothing here touches the disk.
 """
 
 from __future__ import annotations
 
+import copy
+import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .drive.transmission import Transmission
+from .contact.model import parse_model
+from .contact.scene import parse_scenes
+from .design.contact_setup import check_contact
+from .design.free import check_free
+from .design.settings import parse_design
+from .drive.spec import parse_drive
+from .drive.transmission import PROFILE_PITCH, TEETH_RANGE, BeltPulley, ScrewLever, Transmission
 from .errors import ProblemError
-from .motion.laws import MotionLaw
-from .motion.timing import SPM_RANGE, TimingDiagram  # noqa: F401 (SPM_RANGE: read from here too)
+from .io.fields import _REQUIRED, Fields, apply_overrides
+from .motion.laws import LAW_NAMES, LAW_PARAMETERS, MotionLaw, make_law
+from .motion.timing import INTERVAL_TIMES, SPM_RANGE, Interval, TimingDiagram
+from .servo.kernel import ServoErrorTerm
+from .servo.settings import parse_servo
 
 if TYPE_CHECKING:
     from .contact.model import Model
@@ -64,8 +78,222 @@ class Problem:
         """The same problem with every move following ``law``."""
         return replace(self, timing=self.timing.with_law(law), default_law=law)
 
+    def with_overrides(self, overrides) -> "Problem":
+        """The same problem with ``--set`` texts applied to its data (in memory, validated like a file's);
+        the design records them beside the ones it had."""
+        overrides = [overrides] if isinstance(overrides, str) else list(overrides)
+        if not overrides:
+            return self
+        data = copy.deepcopy(self.data)
+        overridden = apply_overrides(data, overrides, str(self.file))
+        return replace(parse_problem(data, str(self.file), overridden, Path(self.file)),
+                       overrides=(*self.overrides, *overrides))
+
     def with_spm(self, spm: float) -> "Problem":
         if not (isinstance(spm, (int, float)) and SPM_RANGE[0] <= spm <= SPM_RANGE[1]):
             raise ProblemError(str(self.file), "machine.spm", f"{spm!r} is outside the plausible range "
                                                               f"[{SPM_RANGE[0]:g}, {SPM_RANGE[1]:g}]")
         return replace(self, spm=float(spm))
+
+
+def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), path: Path | None = None) -> Problem:
+    top = Fields(data, file, "", overridden)
+
+    meta = top.table("problem")
+    name = meta.string("name")
+    description = meta.string("description", "")
+    meta.finish()
+
+    machine = top.table("machine")
+    spm = machine.number("spm", min=SPM_RANGE[0], max=SPM_RANGE[1])  # problem.SPM_RANGE says why
+    # a cam revolution per 100 stitches to 100 revolutions per stitch: gears and indexing drives, not beyond
+    revs = machine.number("cam_revolutions_per_stitch", 1.0, min=0.01, max=100.0)
+    machine.finish()
+
+    motion = top.table("motion")
+    default_law = _read_law(motion, "law")
+    motion.finish()
+
+    timing = _read_timing(top.table("timing"), default_law, revs)
+    _check_cycle(machine, timing, spm)
+
+    transmission = _read_transmission(top.table("transmission"), timing)
+
+    model = parse_model(top.table("model", required=False), transmission)
+    scenes = parse_scenes(top.table("scenes", required=False), model)
+    drive_table = top.table("drive", required=False)
+    drive = parse_drive(drive_table, (path or Path(file)).parent, model) if drive_table is not None else None
+    if model is not None and model.transmission is not None and timing.intervals[0].start_position != 0:
+        raise ProblemError(file, "timing.start_position_mm", "a model on the transmission's members starts at the "
+                                                             "transmission's zero: start_position_mm must be 0")
+    if drive is not None:
+        stages = transmission.stage_names()
+        for k, member in enumerate(drive.load.members):
+            if member.stage not in stages:
+                raise ProblemError(file, f"drive.members[{k + 1}].stage", f"{member.stage!r} is no stage of the "
+                                                                         f"{transmission.name}: {', '.join(stages)}")
+    design_table = top.table("design", required=False)
+    design = parse_design(design_table) if design_table is not None else None
+    check_contact(design.contact if design is not None else None, model, scenes, file)
+    check_free(design.free if design is not None else (), model, drive, file)
+    servo_table = top.table("servo", required=False)
+    servo = parse_servo(servo_table, timing, spm) if servo_table is not None else None
+    top.finish()
+    return Problem(
+        file=path or Path(file),
+        name=name,
+        description=description,
+        spm=spm,
+        timing=timing,
+        default_law=default_law,
+        transmission=transmission,
+        data=data,
+        model=model,
+        scenes=scenes,
+        drive=drive,
+        design=design,
+        servo=servo,
+        error_terms=(ServoErrorTerm(),) if servo is not None else (),
+    )
+
+
+def _read_law(f: Fields, key: str, default: MotionLaw | None = None) -> MotionLaw:
+    """A law name plus its parameters, read from the same table (``law = "modified_sine"``, ``chi = 0.095``)."""
+    name = f.string(key, None if default is not None else _REQUIRED, choices=LAW_NAMES)
+    params = {}
+    for pname in LAW_PARAMETERS:
+        if f.has(pname):
+            params[pname] = f.number(pname)  # its range is the law's own (motion/laws.py, make_law)
+    if name is None:
+        if params:
+            name = default.name
+            params = {**default.params, **params}
+        else:
+            return default
+    return make_law(name, where=(f.file, f.where(key)), **params)
+
+
+#: Plausible cycle (cam revolution) time [s]: 1 ms (20000 spm at two stitches a revolution) to 10 min; and the
+#: shortest move a drive can follow [s]. Outside them the stroke's derivatives overflow or the servo
+#: simulation's time grid cannot hold a cycle.
+CYCLE_RANGE_S = (1e-3, 600.0)
+SHORTEST_MOVE_S = 1e-4
+
+
+def _check_cycle(machine: Fields, timing: TimingDiagram, spm: float) -> None:
+    """The stitch rate, cam revolutions per stitch and spans together: a cycle and moves a drive can make."""
+    period = timing.period(spm)
+    if not CYCLE_RANGE_S[0] <= period <= CYCLE_RANGE_S[1]:
+        raise machine.error("spm", f"{spm:g} spm at cam_revolutions_per_stitch = {timing.cam_revolutions_per_stitch:g} "
+                                   f"is a cycle of {period:.3g} s, outside the plausible range "
+                                   f"[{CYCLE_RANGE_S[0]:g}, {CYCLE_RANGE_S[1]:g}] s")
+    sch = timing.schedule(spm)
+    move = min(d for itv, d in zip(timing.intervals, sch.duration) if itv.is_move)
+    if move < SHORTEST_MOVE_S:
+        raise machine.error("spm", f"at {spm:g} spm the shortest move lasts {move * 1e6:.3g} us, below the "
+                                   f"{SHORTEST_MOVE_S * 1e6:g} us a drive can follow: lower the rate or widen the move")
+
+
+#: How far the span a published time implies may differ from the file's span_deg [deg]: the
+#: thesis's own times and spans differ by up to 0.9 deg (reference problem, move 3 and dwell 6).
+PUBLISHED_SPAN_TOLERANCE_DEG = 1.0
+#: The shortest span of a move [deg of cam angle]: below it a move is an impact, not a cam motion.
+MOVE_SPAN_MIN_DEG = 0.1
+
+
+def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagram:
+    times = f.string("interval_times", "nominal", choices=INTERVAL_TIMES)
+    # lengths in mm: within +-100 m of the origin, strokes up to 100 m (a loom sley swings 0.1 m, the known
+    # optima use 1 m, a gantry tens of metres), so no position overflows a kinematic table
+    position = f.number("start_position_mm", min=-1e5, max=1e5) * 1e-3
+    rows = f.tables("intervals")
+    if len(rows) < 2:
+        raise f.error("intervals", f"needs at least two intervals (a move and a dwell), got {len(rows)}")
+    intervals = []
+    n_moves = 0
+    for row in rows:
+        name = row.string("name")
+        span = row.number("span_deg", min=0.0, max=360.0)
+        stroke = row.number("stroke_mm", 0.0, min=0.0, max=1e5) * 1e-3
+        # published interval times: a cycle of at most an hour (only their proportions are used)
+        published = row.number("published_time_s", None, min=0.0, max=3600.0) if times == "nominal" else \
+            row.number("published_time_s", positive=True, max=3600.0)
+        handover = row.boolean("handover", False)
+        if stroke > 0:
+            if span < MOVE_SPAN_MIN_DEG:
+                raise row.error("span_deg", f"a move ({stroke * 1e3:g} mm) needs a span of at least "
+                                            f"{MOVE_SPAN_MIN_DEG:g} deg, got {span:g} deg")
+            direction = row.string("direction", choices=("up", "down"))
+            law = _read_law(row, "law", default_law)
+            n_moves += 1
+            signed = stroke if direction == "up" else -stroke
+            move_index = n_moves
+        else:
+            for key in ("direction", "law", *LAW_PARAMETERS):
+                if row.has(key):
+                    raise row.error(key, "a dwell (stroke_mm = 0) has no " + key)
+            if handover:
+                raise row.error("handover", "must be on the move that ends at the handover position, not on a dwell")
+            law, signed, move_index = None, 0.0, None
+        row.finish()
+        intervals.append(Interval(len(intervals) + 1, name, span, position, position + signed, law,
+                                  published, handover, move_index))
+        position += signed
+    total = sum(i.span_deg for i in intervals)
+    if abs(total - 360.0) > 1e-6:
+        raise f.error("intervals", f"spans add to {total:g} deg, not 360 deg: an interval is missing or a span is wrong")
+    if times == "published":
+        # the times set the schedule; the spans must still say the same (an edited span would be ignored)
+        t_total = sum(i.published_time_s for i in intervals)
+        for i, row in zip(intervals, rows):
+            implied = 360.0 * i.published_time_s / t_total
+            if abs(implied - i.span_deg) > PUBLISHED_SPAN_TOLERANCE_DEG:
+                raise row.error("span_deg", f"{i.span_deg:g} deg, but interval_times = \"published\" takes the span "
+                                            f"from published_time_s: {implied:.2f} deg; change both, or set "
+                                            f"timing.interval_times = \"nominal\" to use the spans")
+    start = intervals[0].start_position
+    if abs(position - start) > 1e-9:
+        raise f.error("intervals", f"the strokes do not close the cycle: the last interval ends at {position * 1e3:g} mm, "
+                                   f"the first starts at {start * 1e3:g} mm (a move missing, or a direction wrong?)")
+    if n_moves == 0:
+        raise f.error("intervals", "has no move (every stroke_mm is 0)")
+    if sum(i.handover for i in intervals) > 1:
+        raise f.error("intervals", "more than one interval is marked handover = true")
+    f.finish()
+    return TimingDiagram(tuple(intervals), revs, times)
+
+
+def _optional_mm(f: Fields, key: str, lo: float, hi: float) -> float | None:
+    value = f.number(key, None, min=lo, max=hi)
+    return None if value is None else value * 1e-3
+
+
+def _read_transmission(trans: Fields, timing: TimingDiagram) -> Transmission:
+    """``[transmission]``: a toothed belt pulley (``pulley_teeth``), or a screw and lever (``lead_mm``,
+    ``lever_arm_mm`` R0, ``sleeve_arm_mm`` R0P, ``lever_offset_deg``, ``screw_inertia_kg_cm2``)."""
+    kind = trans.string("type", "belt_pulley", choices=("belt_pulley", "screw_lever"))
+    if kind == "belt_pulley":
+        profile = trans.string("profile", "GT3", choices=tuple(PROFILE_PITCH))
+        teeth = trans.number("pulley_teeth", integer=True, min=TEETH_RANGE[0], max=TEETH_RANGE[1])
+        trans.finish()
+        return BeltPulley.toothed(teeth, profile)
+    # leads of 0.1 mm (a fine adjusting screw) to 100 mm (a steep ball screw); lever arms of 1 mm to 1 m;
+    # the arms' offset within the lever's own range (transmission.LEVER_LIMIT_DEG); a screw of up to
+    # 1e4 kg cm^2 (a 100 mm steel shaft a metre long is 8e3 kg cm^2)
+    tr = ScrewLever(trans.number("lead_mm", min=0.1, max=100.0) * 1e-3,
+                    trans.number("lever_arm_mm", min=1.0, max=1e3) * 1e-3,
+                    trans.number("sleeve_arm_mm", min=1.0, max=1e3) * 1e-3,
+                    math.radians(trans.number("lever_offset_deg", 0.0, min=-80.0, max=80.0)),
+                    trans.number("screw_inertia_kg_cm2", 0.0, min=0.0, max=1e4) * 1e-4,
+                    # the screw torque from the nut force (contact/chain.py): pitch diameters 1-100 mm, flank
+                    # friction 0.01 (ball screw) to 1, flank angles 0 (square) to 90 deg (metric 60, Tr 30)
+                    _optional_mm(trans, "screw_diameter_mm", 1.0, 100.0),
+                    trans.number("thread_friction", 0.15, min=0.01, max=1.0),
+                    math.radians(trans.number("thread_angle_deg", 30.0, min=0.0, max=90.0)))
+    positions = [p for i in timing.intervals for p in (i.start_position, i.end_position)]
+    why = tr.range_error(min(positions), max(positions))
+    if why is not None:
+        raise trans.error("sleeve_arm_mm", f"the strokes of [timing] reach beyond the lever's range: {why}; "
+                                           "a longer arm or a shorter stroke")
+    trans.finish()
+    return tr

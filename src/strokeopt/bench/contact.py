@@ -17,7 +17,7 @@ import numpy as np
 
 from ..contact.simulate import REFINE_POINTS, SceneResult, SimulationOptions, integrate_scene, simulate_scene
 from ..errors import SolverError
-from ..io.problem_file import load_problem
+from ..files.problem_file import load_problem
 from .registry import BenchResult, BenchRow, benchmark, reference_problem_path
 
 

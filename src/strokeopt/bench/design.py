@@ -12,7 +12,7 @@ from ..design.refine import solve_one
 from ..design.request import DriveChoice, DriveSetup, SolveRequest
 from ..design.solve import solve_design
 from ..design.solver import solver_options
-from ..io.problem_file import load_problem
+from ..files.problem_file import load_problem
 from .registry import BenchResult, BenchRow, benchmark, best_time, reference_problem_path
 
 
@@ -151,7 +151,7 @@ def _bench_design_vs_rockit() -> BenchResult:
                                   "against one verified solve", target_s=60.0)
 def _bench_design_impact_study() -> BenchResult:
     from ..contact.verify import design_verification
-    from ..design.studies import impact_study
+    from ..studies.sweeps import impact_study
 
     p = load_problem(reference_problem_path().parent / "deco2000_contact_design.toml")
     limits = [1.6 + 1.3 * k / 7 for k in range(8)]

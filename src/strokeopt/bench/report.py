@@ -9,7 +9,7 @@ from pathlib import Path
 from ..design.compare import compare_with_laws
 from ..design.nlp import clear_cache
 from ..design.solve import solve_design
-from ..io.problem_file import load_problem
+from ..files.problem_file import load_problem
 from ..report.design import design_summary
 from ..report.design_report import gather, write_report
 from .registry import BenchResult, BenchRow, benchmark, reference_problem_path

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 
-from ..io.problem_file import load_problem
+from ..files.problem_file import load_problem
 from .registry import BenchResult, BenchRow, benchmark, best_time, reference_problem_path
 
 

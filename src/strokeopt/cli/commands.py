@@ -138,7 +138,7 @@ def cmd_accuracy(args) -> int:
 def cmd_tradeoff(args) -> int:
     from ..report.format import to_json
     from ..report.servo import plot_tradeoff, tradeoff_text
-    from ..servo.tradeoff import tradeoff
+    from ..studies.tradeoff import tradeoff
 
     problem = _load(args)
     accuracies = None
@@ -224,7 +224,7 @@ def _report_scene(args, problem, scene, result, extra=None, kind: str = "simulat
 def cmd_simulate(args) -> int:
     from ..contact.simulate import simulate_scene
     from ..contact.studies import lag_onset_spm, sweep_spm, tolerance_study
-    from ..io.ranges import parse_spm_range
+    from ..files.ranges import parse_spm_range
     from ..report.contact import STUDY_COLUMNS, SWEEP_COLUMNS, plot_sweep, plot_tolerance_study
     from ..report.format import format_table, to_json
 
@@ -283,10 +283,11 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_verify(args) -> int:
-    from ..contact.verify import DesignStroke, design_problem_file, verify
+    from ..contact.verify import verify
+    from ..files.design_file import DesignStroke, design_problem_file
 
     if args.design is None:  # verify DESIGN.json [--problem FILE]: the problem recorded in the design
-        from ..io.design_file import read_design
+        from ..files.design_file import read_design
 
         args.design = args.file
         args.problem = str(design_problem_file(args.design, read_design(args.design)[0], args.problem))

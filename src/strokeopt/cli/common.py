@@ -16,7 +16,7 @@ DEFAULT_OUT = Path("strokeopt-out")
 
 
 def _spm_value(text: str) -> float:
-    from ..io.ranges import parse_spm
+    from ..files.ranges import parse_spm
 
     return parse_spm(text)
 
@@ -48,7 +48,7 @@ def apply_drive_options(args, fix_in_design: bool = False) -> None:
         key, value = parse_override(text)
         forced[".".join(str(k) for k in key)] = (text, value)
     if design is not None:
-        from ..io.design_file import read_design
+        from ..files.design_file import read_design
 
         data, args.design_stroke = read_design(design)
         args.design_data = data
@@ -63,7 +63,7 @@ def apply_drive_options(args, fix_in_design: bool = False) -> None:
             raise ProblemError(design, "spm", f"the design was solved at {data['spm']:g} spm, but --set "
                                               f"{forced['machine.spm'][0]} asks for another: omit the --set")
         args.spm = repr(float(data["spm"]))
-        from ..io.design_file import design_overrides
+        from ..files.design_file import design_overrides
 
         for text in design_overrides(data):  # the --set texts the design was solved with hold here too
             key, value = parse_override(text)
@@ -133,7 +133,7 @@ def step_angle(problem) -> float | None:
 
 def _load(args, fix_in_design: bool = False):
     from ..motion.laws import make_law
-    from ..io.problem_file import load_problem
+    from ..files.problem_file import load_problem
 
     apply_drive_options(args, fix_in_design)
     overrides = list(args.overrides)
@@ -208,7 +208,7 @@ def check_outputs(args) -> None:
     """Before any work: --out DIR and the directory of --plot FILE must be writable (created if missing)."""
     out = getattr(args, "out", None)
     if out is not None:
-        from ..io.design_file import check_out_dir
+        from ..files.design_file import check_out_dir
 
         _probe_dir(check_out_dir(out), "--out", "design.json")
     plot = getattr(args, "plot", None)

@@ -37,23 +37,23 @@ def _scenes(args, problem) -> list[str] | None:
     return list(dict.fromkeys(args.scene))
 
 
-def design_of(args, problem):
-    """The design a report shows and the ``solve --json`` report of it: read from --design (the numbers of
-    the file, which ``solve --out`` wrote with its comparison and drive), else solved now."""
+def design_of(args, problem, scenes=None):
+    """The verified design a report shows, the ``solve --json`` report of it, and where it comes from: read
+    from --design (the numbers of the file, which ``solve --out`` wrote with its comparison and drive) and
+    judged again, else solved now (the same pipeline as ``strokeopt solve``)."""
     from ..design.compare import compare_with_laws
     from ..design.result import design_from_data
-    from ..report.design import design_summary
+    from ..studies.verified import verify_design
 
     data = args.design_data
     if data is None:
-        design, comparison, chosen = solve_once(args, problem, progress_bar(args, "solve", "solve"))
-        source = "solved now"
-    else:
-        design = design_from_data(problem, data, args.design_stroke)
-        comparison = data.get("comparison") or compare_with_laws(design)
-        chosen = data.get("drive") or drive_used(args, problem, design.motor, design.pulley_teeth)
-        source = f"read from {args.design}"
-    return design, {**design_summary(design), "drive": chosen, "comparison": comparison}, source
+        verified, chosen = solve_once(args, problem, progress_bar(args, "solve", "solve"), scenes)
+        return verified, {**verified.summary(), "drive": chosen}, "solved now"
+    design = design_from_data(problem, data, args.design_stroke)
+    verified = verify_design(design, scenes=scenes, options=getattr(args, "sim_options", None))
+    chosen = data.get("drive") or drive_used(args, problem, design.motor, design.pulley_teeth)
+    summary = {**verified.summary(), "drive": chosen, "comparison": data.get("comparison") or compare_with_laws(design)}
+    return verified, summary, f"read from {args.design}"
 
 
 def cmd_report(args) -> int:
@@ -63,9 +63,10 @@ def cmd_report(args) -> int:
     out = _html_path(args.html)
     problem = _load(args, fix_in_design=True)
     scenes = _scenes(args, problem)
-    design, summary, source = design_of(args, problem)
-    t0 = time.perf_counter()  # the report after the solve: the servo simulation, the scenes, figures and page
-    data = gather(problem, design, summary, scenes, _sim_options(args), source)
+    args.sim_options = _sim_options(args)
+    t0 = time.perf_counter()  # the solve (or the design file) judged: servo simulation, scenes; then the page
+    verified, summary, source = design_of(args, problem, scenes)
+    data = gather(verified, summary, source)
     info = write_report(data, out)
     info["build_time_s"] = time.perf_counter() - t0
     info.update(status="ok", scenes=list(data.scenes), design_status=summary["status"])
@@ -80,11 +81,9 @@ def cmd_report(args) -> int:
 def _design_file(path: str):
     """A design file's problem (its file, its --set texts, its stitch rate), the design and its ``solve --json``
     report as ``solve --out`` stored it."""
-    from ..contact.verify import load_design
     from ..design.compare import compare_with_laws
-    from ..design.result import design_from_data
-    from ..io.design_file import read_design
-    from ..report.design import design_summary
+    from ..design.result import design_from_data, design_summary
+    from ..files.design_file import load_design, read_design
 
     data, stroke = read_design(path)
     problem = load_design(path).problem
@@ -105,8 +104,12 @@ def cmd_compare(args) -> int:
     loaded = [_design_file(path) for path in args.designs]  # every file read and checked before any simulation
     t0 = time.perf_counter()
     datas = []
+    from ..studies.verified import verify_design
+
     for path, (problem, design, summary) in zip(args.designs, loaded):
-        datas.append(gather(problem, design, summary, _scenes(args, problem), _sim_options(args), f"read from {path}"))
+        verified = verify_design(design, scenes=_scenes(args, problem), options=_sim_options(args))
+        datas.append(gather(verified, {**summary, "status": verified.status, "verdict": verified.verdict},
+                            f"read from {path}"))
     info = write_compare(datas, out)
     info.update(status="ok", build_time_s=time.perf_counter() - t0, designs=list(args.designs))
     if args.json:

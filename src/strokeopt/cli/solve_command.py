@@ -10,47 +10,31 @@ from ..errors import ProblemError
 from .common import _emit, _load, _plot_path, _write_figure, drive_used, progress_bar, spm_tag
 
 
-def _servo_handover_check(problem):
-    """The solve's handover check: the full servo simulation of the design on its motor and pulley (the
-    number `strokeopt accuracy --design` prints). Composed here: the design package does not import servo."""
-    if getattr(problem, "servo", None) is None or getattr(problem, "drive", None) is None:
-        return None
-
-    def check(design):
-        from ..servo.accuracy import design_accuracy
-
-        return design_accuracy(design).handover_error, "full servo simulation"
-
-    return check
-
-
 def _objective(args, problem) -> str | None:
     """The objective a solve uses: --objective, else the file's."""
     return args.objective or (problem.design.objective if problem.design else None)
 
 
-def solve_once(args, problem, progress=None):
-    """One design solve as ``strokeopt solve`` makes it: the design (with the full servo simulation's
-    handover check), its comparison with the classic laws, and the drive it used (``solve --json``)."""
-    from ..design.compare import compare_with_laws
-    from ..design.solve import solve_design
+def solve_once(args, problem, progress=None, scenes=None):
+    """One verified design as ``strokeopt solve`` and ``report`` make it (:func:`strokeopt.studies.verified.
+    solve_verified`: the library's pipeline), with the drive it used (``solve --json``)."""
+    from ..studies.verified import solve_verified
 
-    design = solve_design(problem, objective=args.objective, verbose=getattr(args, "verbose", False),
-                          progress=progress and (lambda it: progress(it, "motors")),
-                          handover_check=_servo_handover_check(problem))
-    _verify_solved(design)
-    comparison = compare_with_laws(design)
+    verified = solve_verified(problem, objective=args.objective, verbose=getattr(args, "verbose", False),
+                              progress=progress and (lambda it: progress(it, "motors")), scenes=scenes,
+                              options=getattr(args, "sim_options", None))
+    design = verified.design
     chosen = drive_used(args, problem, design.motor, design.pulley_teeth)
     if problem.design is not None and (problem.design.motor_choice != "fixed" or problem.design.pulley != "fixed"):
         chosen["from"] = (f"the solve's choice: design.motor_choice = {problem.design.motor_choice}, design.pulley "
                           f"= {problem.design.pulley}")
-    return design, comparison, chosen
+    return verified, chosen
 
 
 def _cam_spec(args):
     """The cam table of ``solve --out`` as its options ask (checked before the solve)."""
-    from ..io.design_file import CamTableSpec
-    from ..io.ranges import check_master_counts, parse_cam_resolution
+    from ..files.design_file import CamTableSpec
+    from ..files.ranges import check_master_counts, parse_cam_resolution
 
     spec = CamTableSpec(parse_cam_resolution(args.cam_table_resolution), args.master_unit, args.master_counts)
     if args.out is None and spec != CamTableSpec():
@@ -63,13 +47,13 @@ def _cam_spec(args):
 
 def cmd_solve(args) -> int:
     from ..design.objectives import OBJECTIVES
-    from ..design.studies import fastest_feasible, mesh_study, sweep_design
-    from ..report.design import design_summary, design_text, plot_design, plot_design_sweep, plot_mesh_study
+    from ..studies.sweeps import fastest_feasible, mesh_study, sweep_design
+    from ..report.design import design_text, plot_design, plot_design_sweep, plot_mesh_study
     from ..report.format import drive_text, format_table, to_json
 
     sweep = None
     if args.spm is not None and ":" in args.spm and args.design is None:  # with --design: refused by _load
-        from ..io.ranges import parse_spm_range
+        from ..files.ranges import parse_spm_range
 
         sweep = parse_spm_range(args.spm)
         args.spm = None
@@ -122,9 +106,11 @@ def cmd_solve(args) -> int:
                   file=sys.stderr)
             return 1
         return 0
-    design, comparison, chosen = solve_once(args, problem, progress)
+    verified, chosen = solve_once(args, problem, progress)
+    design, comparison = verified.design, verified.comparison
+    summary = {**verified.summary(), "drive": chosen}
     if args.json:
-        _emit(to_json({**design_summary(design), "drive": chosen, "comparison": comparison}))
+        _emit(to_json(summary))
     else:
         print(design_text(design, comparison))
         if design.verification is not None:
@@ -132,13 +118,15 @@ def cmd_solve(args) -> int:
 
             print(verification_text(design.verification))
         print(drive_text(chosen))
+        print(f"verdict: {verified.verdict}")
     if args.out is not None:
-        for path in design.write(args.out, spec=cam_spec, extra={"comparison": comparison, "drive": chosen}):
+        from ..files.design_file import write_design
+
+        for path in write_design(design, args.out, spec=cam_spec, extra={"comparison": comparison, "drive": chosen}):
             print(f"written {path}", file=sys.stderr if args.json else sys.stdout)
         from ..report.design_report import gather, write_report
 
-        summary = {**design_summary(design), "drive": chosen, "comparison": comparison}
-        info = write_report(gather(problem, design, summary), Path(args.out) / "report.html")  # `strokeopt report`
+        info = write_report(gather(verified, summary), Path(args.out) / "report.html")  # `strokeopt report`
         print(f"written {info['report']}", file=sys.stderr if args.json else sys.stdout)
     # one figure: --plot FILE, else into --out DIR beside design.json, else strokeopt-out/
     fig_path = _plot_path(args, "solve", spm_tag(design.spm), design.objective)
@@ -154,19 +142,9 @@ def cmd_solve(args) -> int:
     return 0
 
 
-def _verify_solved(design) -> None:
-    """A problem with scenes: re-simulate the solved stroke and judge it (contact/verify.py); a failure sets the
-    design's status to ``verification failed`` (exit 1), a design already over a limit keeps its status."""
-    from ..contact.verify import design_verification
-
-    design.verification = design_verification(design)
-    if design.verification is not None and design.verification["status"] != "ok" and design.status != "limits exceeded":
-        design.status = "verification failed"
-
-
 def _impact_range(text: str | None) -> list[float]:
     """``--impact-range MIN:MAX[:POINTS]`` -> the impact-velocity limits [m/s]."""
-    from ..design.studies import IMPACT_POINTS_MAX
+    from ..studies.sweeps import IMPACT_POINTS_MAX
 
     if text is None:
         raise ProblemError("--impact-range", "", "--study impact needs the limits: --impact-range MIN:MAX[:POINTS] "
@@ -185,7 +163,7 @@ def _impact_range(text: str | None) -> list[float]:
 
 
 def _impact_study(args, problem, progress) -> int:
-    from ..design.studies import impact_study
+    from ..studies.sweeps import impact_study
     from ..report.design import impact_study_text, plot_impact_study
     from ..report.format import to_json
 

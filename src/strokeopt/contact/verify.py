@@ -4,59 +4,13 @@ A design (design/) is solved on a rigid model of the drive; :func:`verify` runs 
 stroke, at its stitch rate, through a scene of its problem's contact model
 (simulate.py) and returns the :class:`~strokeopt.contact.simulate.SceneResult`, the
 same results ``strokeopt simulate`` reports for a classic law. It takes the
-``Design`` a solve returns, or a :class:`DesignStroke` read back from a
-``design.json`` by :func:`load_design` (what ``strokeopt verify`` does).
+``Design`` a solve returns, or a ``DesignStroke`` read back from a
+``design.json`` by :func:`strokeopt.files.design_file.load_design` (what ``strokeopt verify`` does).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from pathlib import Path
-from typing import Any
-
-from ..io.design_file import design_overrides, read_design
-from ..errors import ProblemError
-from ..io.problem_file import load_problem
 from .simulate import SceneResult, SimulationOptions, simulate_scene
-
-
-@dataclass(frozen=True)
-class DesignStroke:
-    """What verification needs of a design: its problem, its stroke and the stitch rate it was solved at.
-
-    ``source``: the design file it was read from; ``objective``: the objective it was solved for.
-    A solve's ``Design`` has the same ``problem``, ``stroke`` and ``spm``.
-    """
-
-    problem: Any
-    stroke: Any
-    spm: float
-    source: str = ""
-    objective: str | None = None
-
-
-def load_design(path, problem_file=None, overrides=()) -> DesignStroke:
-    """Read a ``design.json`` and the problem it was solved for, at the design's stitch rate.
-
-    ``problem_file`` replaces the file the design names (a relative name the design names is
-    also looked for next to the design file); ``overrides`` are ``--set`` texts for it.
-    """
-    data, stroke = read_design(path)
-    file = design_problem_file(path, data, problem_file)
-    problem = load_problem(file, [*design_overrides(data), *overrides, f"machine.spm={float(data['spm'])!r}"])
-    return DesignStroke(problem, stroke, problem.spm, str(path), data.get("objective"))
-
-
-def design_problem_file(path, data: dict, problem_file=None) -> Path:
-    """The problem file of the design ``data`` read from ``path``: ``problem_file`` if given, else the
-    one the design names (a relative name also looked for next to the design file)."""
-    problem_file = problem_file or data.get("problem_file")
-    if not problem_file:
-        raise ProblemError(str(path), "problem_file", "is missing: pass --problem FILE")
-    file = Path(problem_file)
-    if not file.is_absolute() and not file.exists() and (Path(path).parent / file).exists():
-        file = Path(path).parent / file
-    return file
 
 
 #: How far the simulated impact velocity may exceed its limit before verification fails: the design holds the
@@ -110,7 +64,9 @@ def verification(result: SceneResult, lag_max: float | None = None, impact_veloc
                     and isinstance(r["value"], (int, float)) and not isinstance(r["value"], bool)]
         fields = ", ".join(LIMIT_FIELDS.get(r["criterion"], r["criterion"]) for r in unjudged)
         values = ", ".join(f"{r['criterion']} {r['value']:.4g} {r['unit']}" for r in unjudged)
-        verdict = (f"verified in scene {result.scene!r} at {result.spm:g} spm: " +
+        # "verified" only when every criterion was judged: unjudged ones are named with their values
+        verdict = (("verified" if not unjudged else f"checked ({len(unjudged)} not judged)") +
+                   f" in scene {result.scene!r} at {result.spm:g} spm: " +
                    (", ".join(judged) + " within limits" if judged else "no criterion to judge") +
                    (f"; not judged (no [design.contact] {fields}): {values}" if unjudged else "") +
                    ("; " + ", ".join(f"{c} {v:.4g} {u}" for c, v, u in reported) + " (reported)" if reported else ""))
@@ -122,10 +78,11 @@ def verification(result: SceneResult, lag_max: float | None = None, impact_veloc
 LIMIT_FIELDS = {"lag": "lag_max_mm", "impact velocity": "impact_velocity_max_m_s"}
 
 
-def design_verification(design, scene: str | None = None, options: SimulationOptions | None = None) -> dict | None:
+def design_verification(design, scene: str | None = None, options: SimulationOptions | None = None,
+                        result: SceneResult | None = None) -> dict | None:
     """Re-simulate a solve's ``Design`` in ``scene`` (default: its ``[design.contact]`` scene, else ``release``
     or the first) and judge it (:func:`verification`) by its ``[design.contact]`` limits and its handover
-    check row. None when the problem has no scenes."""
+    check row (``result``: the scene's simulation if already made). None when the problem has no scenes."""
     from .scene import default_scene
 
     problem = design.problem
@@ -133,7 +90,7 @@ def design_verification(design, scene: str | None = None, options: SimulationOpt
         return None
     contact = getattr(getattr(design, "settings", None), "contact", None)
     scene = scene or (contact.scene if contact is not None and contact.scene else default_scene(problem.scenes))
-    result = verify(design, scene, options)
+    result = result if result is not None else verify(design, scene, options)
     handover = next((c for c in design.checks if c["name"].startswith("handover accuracy")), None)
     from .chain import chain_results  # a model on a transmission's members: its links' peak forces
 
@@ -146,8 +103,7 @@ def design_verification(design, scene: str | None = None, options: SimulationOpt
 
 
 def verify(design, scene: str, options: SimulationOptions | None = None) -> SceneResult:
-    """Re-simulate ``design`` (a solve's ``Design``, a :class:`DesignStroke`, or the path of a design.json):
-    its stroke, at its stitch rate, through ``scene`` of its problem's contact model."""
-    if isinstance(design, (str, Path)):
-        design = load_design(design)
+    """Re-simulate ``design`` (a solve's ``Design``, or a ``DesignStroke`` read back from a design.json by
+    :func:`strokeopt.files.design_file.load_design`): its stroke, at its stitch rate, through ``scene`` of
+    its problem's contact model."""
     return simulate_scene(design.problem, scene, design.spm, stroke=design.stroke, options=options)

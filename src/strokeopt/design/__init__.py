@@ -22,5 +22,5 @@ torque        design_torque: the motor torque of a design on its own motor and p
 compare       compare_with_laws
 studies       sweep_design, fastest_feasible, mesh_study, impact_study
 
-Files: strokeopt.io.design_file; text and figures: strokeopt.report.design.
+Files: strokeopt.files.design_file; text and figures: strokeopt.report.design.
 """

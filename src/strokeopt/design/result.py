@@ -1,8 +1,8 @@
 """The result of the design: :class:`Design` (the optimal stroke, the parts, the checks) and
 :class:`MoveResult` per move.
 
-Last step of the design's flow (:mod:`.solve` makes them). Files: :mod:`strokeopt.io.design_file`
-(design.json, cam table); text: :mod:`strokeopt.report.design`.
+Last step of the design's flow (:mod:`.solve` makes them). Files: :mod:`strokeopt.files.design_file`
+(design.json, cam table: ``write_design``); text: :mod:`strokeopt.report.design`.
 """
 
 from __future__ import annotations
@@ -132,17 +132,42 @@ class Design:
         """The value of the check ``name`` (``peak_torque``, ``rms_torque``...), None when not checked."""
         return next((c["value"] for c in self.checks if c["name"] == name), None)
 
-    def write(self, out_dir: str | Path, resolution_deg: float = 0.1, spec=None, extra: dict | None = None) -> list[Path]:
-        """Write ``design.json``, ``cam_table.csv`` and ``cam_table.txt`` into ``out_dir``; returns the paths
-        (:func:`strokeopt.io.design_file.write_design`; ``spec``: a ``CamTableSpec``, resolution and master unit)."""
-        from ..io.design_file import write_design
 
-        return write_design(self, out_dir, resolution_deg, spec, extra)
+def design_summary(design: Design) -> dict:
+    """The JSON report of ``strokeopt solve``: the fields scripts rely on, then the details."""
+    checks = {c["name"]: c for c in design.checks}
+    out = {
+        "status": design.status,
+        "objective": design.objective,
+        "objective_value": design.objective_value,
+        "objective_unit": design.objective_unit,
+        "motor": design.motor,
+        "pulley_teeth": design.pulley_teeth,
+        "spm": design.spm,
+        "peak_torque_N_m": checks["peak_torque"]["value"] if "peak_torque" in checks else None,
+        "rms_torque_N_m": checks["rms_torque"]["value"] if "rms_torque" in checks else None,
+        "moves": [{"index": m.index, "v_max_m_s": m.v_max, "a_max_m_s2": m.a_max, "jerk_max_m_s3": m.jerk_max,
+                   "C_a": m.C_a, "duration_s": m.duration, "stroke_mm": abs(m.stroke) * 1e3,
+                   "direction": move_direction(m.stroke)} for m in design.moves],
+        "active_constraints": design.active_constraints,
+        "solve_time_s": design.solve_time_s,
+    }
+    if "peak_torque" in checks:  # min(motor peak, drive peak limit x rated): the limit of every command
+        out["torque_limit_N_m"] = checks["peak_torque"]["limit"]
+    full = design.summary()
+    for key in ("problem", "problem_file", "cycle_time_s", "pulley_pitch_diameter_mm", "mesh", "checks",
+                "iterations", "notes"):
+        out[key] = full[key]
+    if design.verification is not None:
+        out["verification"] = design.verification
+    if design.free_parameters:
+        out["free_parameters"] = design.free_parameters
+    return out
 
 
 def design_from_data(problem, data: dict, stroke: StrokeFunction) -> Design:
     """The :class:`Design` a ``design.json`` holds (``data`` and ``stroke`` as
-    :func:`strokeopt.io.design_file.read_design` returns them), on ``problem`` (the problem it was
+    :func:`strokeopt.files.design_file.read_design` returns them), on ``problem`` (the problem it was
     solved for, at its stitch rate): its numbers are the file's, its motor the catalogue's."""
     mesh = Mesh(int(data["mesh"]["intervals"]), int(data["mesh"]["degree"]))
     moves = []

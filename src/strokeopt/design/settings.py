@@ -1,7 +1,7 @@
 """The ``[design]`` section of a problem file: :class:`DesignSettings` and its reader.
 
 First step of the design's flow (settings -> :mod:`.request` -> :mod:`.nlp` -> :mod:`.solve`):
-:func:`parse_design` is called by :func:`strokeopt.io.problem_file.load_problem` with the
+:func:`parse_design` is called by :func:`strokeopt.files.problem_file.load_problem` with the
 section's :class:`~strokeopt.io.fields.Fields`; unknown keys are errors.
 """
 

@@ -113,9 +113,7 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     spm = best.nlp.request.spm  # the request's, or the highest rate of min_time
     free = free_report(settings, problem.model, best.free_values) if best.free_values else []
     if free:  # the design's problem: the file's with the values found (recorded as --set texts in design.json)
-        from ..io.problem_file import load_problem
-
-        problem = load_problem(problem.file, [*problem.overrides, *free_overrides(problem.model, best.free_values)])
+        problem = problem.with_overrides(free_overrides(problem.model, best.free_values))
     nlp, sols = best.nlp, best.sols
     stroke = stroke_from_solutions(problem, spm, sols, label=f"optimal ({objective})")
     moves = move_results(nlp.request.moves, sols)

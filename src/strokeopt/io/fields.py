@@ -8,7 +8,7 @@ rather than computed with. Every section reader of strokeopt
 (problem files, catalogue files, design files) reads through :class:`Fields`.
 
 Overrides (``--set key.path=value`` on the command line, ``overrides=`` in
-:func:`~strokeopt.io.problem_file.load_problem`) are applied to the raw data
+:func:`~strokeopt.files.problem_file.load_problem`) are applied to the raw data
 before validation and validated like the file. Array elements are addressed
 1-based: ``timing.intervals[2].law=poly5``.
 """

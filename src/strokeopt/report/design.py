@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from ..drive.checks import torque_limit_text
 from .format import format_table, format_value, period_text
-from ..design.result import Design, move_direction
+from ..design.result import Design, design_summary, move_direction  # noqa: F401 (design_summary: read from here too)
 from ..design.settings import DesignSettings
 
 
@@ -173,38 +173,6 @@ def design_text(design: Design, comparison: list[dict] | None = None) -> str:
     for note in design.notes:
         lines.append(f"note: {note}")
     return "\n".join(lines)
-
-
-def design_summary(design: Design) -> dict:
-    """The JSON report of ``strokeopt solve``: the fields scripts rely on, then the details."""
-    checks = {c["name"]: c for c in design.checks}
-    out = {
-        "status": design.status,
-        "objective": design.objective,
-        "objective_value": design.objective_value,
-        "objective_unit": design.objective_unit,
-        "motor": design.motor,
-        "pulley_teeth": design.pulley_teeth,
-        "spm": design.spm,
-        "peak_torque_N_m": checks["peak_torque"]["value"] if "peak_torque" in checks else None,
-        "rms_torque_N_m": checks["rms_torque"]["value"] if "rms_torque" in checks else None,
-        "moves": [{"index": m.index, "v_max_m_s": m.v_max, "a_max_m_s2": m.a_max, "jerk_max_m_s3": m.jerk_max,
-                   "C_a": m.C_a, "duration_s": m.duration, "stroke_mm": abs(m.stroke) * 1e3,
-                   "direction": move_direction(m.stroke)} for m in design.moves],
-        "active_constraints": design.active_constraints,
-        "solve_time_s": design.solve_time_s,
-    }
-    if "peak_torque" in checks:  # min(motor peak, drive peak limit x rated): the limit of every command
-        out["torque_limit_N_m"] = checks["peak_torque"]["limit"]
-    full = design.summary()
-    for key in ("problem", "problem_file", "cycle_time_s", "pulley_pitch_diameter_mm", "mesh", "checks",
-                "iterations", "notes"):
-        out[key] = full[key]
-    if design.verification is not None:
-        out["verification"] = design.verification
-    if design.free_parameters:
-        out["free_parameters"] = design.free_parameters
-    return out
 
 
 def impact_study_text(report: dict) -> str:

@@ -3,9 +3,10 @@
 problem and timing diagram -> stroke (bar and motor) with the classic-law comparison -> drive
 (torque-speed path over the motor's curves, checks and margins, the binding limit) -> handover
 accuracy (servo / belt / encoder) -> contact-model verification per scene -> numerical accuracy ->
-the inputs and versions. :func:`gather` computes what the report shows beside the solve (the full
-servo simulation, the contact scenes) with the same functions the commands use; :func:`design_report`
-writes the page from it and from ``summary``, the very dict ``strokeopt solve --json`` prints.
+the inputs and versions. :func:`gather` collects what a verified design holds (the full servo
+simulation and the contact scenes of :func:`strokeopt.studies.verified.solve_verified`); :func:`design_report`
+writes the page from it and from ``summary``, the very dict ``strokeopt solve --json`` prints. Nothing here
+solves or simulates.
 """
 
 from __future__ import annotations
@@ -58,22 +59,13 @@ def versions() -> dict:
     return {"strokeopt": __version__, "CasADi": casadi.__version__, "IPOPT": ipopt, "Python": platform.python_version()}
 
 
-def gather(problem, design, summary: dict, scenes=None, options=None, source: str = "solved now") -> ReportData:
-    """The report's data: the full servo simulation of the design (the solve's handover check) and the
-    contact scenes ``scenes`` (names; default: ``release`` if the problem has it, else the first)."""
-    from ..contact.verify import verify
-
-    accuracy = None
-    if getattr(problem, "servo", None) is not None and design.motor_spec is not None:
-        from ..servo.accuracy import design_accuracy
-
-        accuracy = design_accuracy(design)  # the solve's handover check
-    names = list(problem.scenes or {})
-    if scenes is None:
-        scenes = ["release"] if "release" in names else names[:1]
-    results = {name: verify(design, name, options) for name in scenes}
-    left = [n for n in names if n not in results]
-    return ReportData(problem, design, summary, accuracy, results, left, versions(),
+def gather(verified, summary: dict, source: str = "solved now") -> ReportData:
+    """The report's data from a :class:`~strokeopt.studies.verified.VerifiedDesign` (the design, its full
+    servo simulation and the scenes it was simulated in) and ``summary`` (the ``solve --json`` dict):
+    nothing is computed here."""
+    problem = verified.problem
+    left = [n for n in (problem.scenes or {}) if n not in verified.scenes]
+    return ReportData(problem, verified.design, summary, verified.accuracy, dict(verified.scenes), left, versions(),
                       datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC"), source)
 
 

@@ -1,7 +1,7 @@
 """The servo's reports: the text and figure of ``strokeopt accuracy`` and of ``strokeopt tradeoff``.
 
 The servo package computes (:func:`strokeopt.servo.accuracy.accuracy_report`,
-:func:`strokeopt.servo.tradeoff.tradeoff`); this module writes its reports as
+:func:`strokeopt.studies.tradeoff.tradeoff`); this module writes its reports as
 text tables and draws its figures.
 """
 
@@ -120,7 +120,7 @@ def plot_accuracy(result: AccuracyResult, path: str | Path | None = None, motor:
 
 
 def tradeoff_text(report: dict) -> str:
-    """The text of ``strokeopt tradeoff`` from the report of :func:`~strokeopt.servo.tradeoff.tradeoff`."""
+    """The text of ``strokeopt tradeoff`` from the report of :func:`~strokeopt.studies.tradeoff.tradeoff`."""
     head = (f"{report['problem']}: highest stitch rate for a required handover accuracy "
             f"(motor {report['motor']}, {report['pulley_teeth']}-tooth pulley; classic law {report['law']}; "
             f"rates to {report['resolution_spm']:g} spm)\n{report['torque_basis']}")

@@ -1,7 +1,7 @@
 """The servo's term of the design's handover-accuracy constraint (an exact linear functional of the move
 accelerations): :class:`ServoErrorTerm`, passed to the design as one of ``Problem.error_terms``.
 
-The design does not import this module: the problem file (:mod:`strokeopt.io.problem_file`) gives the
+The design does not import this module: the problem file (:mod:`strokeopt.files.problem_file`) gives the
 term to a problem with a ``[servo]`` section, and :func:`strokeopt.design.solve.solve_design` takes it
 from there (or from its ``error_terms`` argument)."""
 

@@ -1,7 +1,7 @@
 """The ``[servo]`` section: the drive's sampling, feed-forwards, tuning choice and belt geometry.
 
 First step of the servo flow: :func:`parse_servo` (called by
-:func:`strokeopt.io.problem_file.load_problem`) turns the section into a
+:func:`strokeopt.files.problem_file.load_problem`) turns the section into a
 :class:`ServoSettings`, SI units; :func:`check_sampling` refuses a sampling
 time as long as a move. The plant (:mod:`.plant`), the loop (:mod:`.loop`) and
 the accuracy prediction (:mod:`.accuracy`) read these settings.

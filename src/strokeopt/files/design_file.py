@@ -37,6 +37,7 @@ from __future__ import annotations
 import json
 import os
 from dataclasses import dataclass
+from typing import Any
 from pathlib import Path
 
 import numpy as np
@@ -44,8 +45,9 @@ import numpy as np
 from ..design.collocation import Mesh, MoveSolution, move_piece
 from ..errors import ProblemError, SolverError
 from ..problem import SPM_RANGE
-from .fields import Fields
-from .plain import to_json
+from .problem_file import load_problem
+from ..io.fields import Fields
+from ..io.plain import to_json
 from ..motion.stroke import StrokeFunction, dwell_piece
 
 
@@ -323,3 +325,42 @@ def read_design(path: str | Path) -> tuple[dict, StrokeFunction]:
     except (TypeError, ValueError) as exc:
         raise ProblemError(str(path), "", f"design file is malformed: {exc}") from None
     return data, stroke
+
+
+@dataclass(frozen=True)
+class DesignStroke:
+    """What verification needs of a design: its problem, its stroke and the stitch rate it was solved at.
+
+    ``source``: the design file it was read from; ``objective``: the objective it was solved for.
+    A solve's ``Design`` has the same ``problem``, ``stroke`` and ``spm``.
+    """
+
+    problem: Any
+    stroke: Any
+    spm: float
+    source: str = ""
+    objective: str | None = None
+
+
+def load_design(path, problem_file=None, overrides=()) -> DesignStroke:
+    """Read a ``design.json`` and the problem it was solved for, at the design's stitch rate.
+
+    ``problem_file`` replaces the file the design names (a relative name the design names is
+    also looked for next to the design file); ``overrides`` are ``--set`` texts for it.
+    """
+    data, stroke = read_design(path)
+    file = design_problem_file(path, data, problem_file)
+    problem = load_problem(file, [*design_overrides(data), *overrides, f"machine.spm={float(data['spm'])!r}"])
+    return DesignStroke(problem, stroke, problem.spm, str(path), data.get("objective"))
+
+
+def design_problem_file(path, data: dict, problem_file=None) -> Path:
+    """The problem file of the design ``data`` read from ``path``: ``problem_file`` if given, else the
+    one the design names (a relative name also looked for next to the design file)."""
+    problem_file = problem_file or data.get("problem_file")
+    if not problem_file:
+        raise ProblemError(str(path), "problem_file", "is missing: pass --problem FILE")
+    file = Path(problem_file)
+    if not file.is_absolute() and not file.exists() and (Path(path).parent / file).exists():
+        file = Path(path).parent / file
+    return file

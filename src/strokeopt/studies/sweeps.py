@@ -10,10 +10,10 @@ from __future__ import annotations
 import time
 from dataclasses import replace
 
-from .collocation import Mesh
-from .nlp import clear_cache
-from .settings import DesignSettings
-from .solve import solve_design
+from ..design.collocation import Mesh
+from ..design.nlp import clear_cache
+from ..design.settings import DesignSettings
+from ..design.solve import solve_design
 from ..errors import ProblemError, SolverError
 
 

@@ -15,10 +15,10 @@ import numpy as np
 
 from ..drive.sizing import bisect_highest
 from ..errors import ProblemError, SolverError
-from .accuracy import TORQUE_BASIS, handover_accuracy
-from .loop import tuned_gains
-from .plant import axis_from_problem
-from .settings import settings_of, shortest_move
+from ..servo.accuracy import TORQUE_BASIS, handover_accuracy
+from ..servo.loop import tuned_gains
+from ..servo.plant import axis_from_problem
+from ..servo.settings import settings_of, shortest_move
 
 
 # --------------------------------------------------------------------------- what accuracy costs in time
