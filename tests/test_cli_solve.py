@@ -30,7 +30,7 @@ def test_known_optimum_json(capsys, tmp_path):
         assert key in data
     assert data["status"] == "optimal" and data["objective"] == "min_jerk"
     assert data["moves"][0]["index"] == 1
-    assert data["moves"][0]["C_a"] == pytest.approx(5.7735, rel=0.005)  # DESIGN.md known optimum
+    assert data["moves"][0]["C_a"] == pytest.approx(5.7735, rel=0.005)  # docs/architecture.md known optimum
     assert {"v_max_m_s", "a_max_m_s2", "jerk_max_m_s3"} <= set(data["moves"][0])
     # the convention of `strokeopt kinematics`: stroke_mm >= 0 with a direction
     assert [(m["stroke_mm"], m["direction"]) for m in data["moves"]] == [(1000, "up"), (1000, "down")]

@@ -74,7 +74,7 @@ def test_stroke_reproduces_collocation_polynomial_and_rests():
         # rest to rest, the end position met exactly
         assert y[0] == 0 and y[-1] == pytest.approx(1.0, abs=1e-12)
         assert abs(y1[0]) < 1e-12 and abs(y1[-1]) < 1e-12 and abs(y2[0]) < 1e-12 and abs(y2[-1]) < 1e-9
-    # the 3-4-5 polynomial: y = 10x^3 - 15x^4 + 6x^5 (DESIGN.md known optimum)
+    # the 3-4-5 polynomial: y = 10x^3 - 15x^4 + 6x^5 (docs/architecture.md known optimum)
     x = np.linspace(0, 1, 101)
     y = design.moves[0].solution.evaluate(x)[0]
     assert y == pytest.approx(10 * x**3 - 15 * x**4 + 6 * x**5, abs=1e-6)

@@ -220,7 +220,7 @@ def test_max_spm_none_when_the_static_load_is_too_much(cat):
 
 
 def test_inertia_matching_optimum(reference, cat):
-    # DESIGN.md known optimum: fixed motion, inertia-only load: (J/r + m r) a is smallest at r = sqrt(J/m)
+    # docs/architecture.md known optimum: fixed motion, inertia-only load: (J/r + m r) a is smallest at r = sqrt(J/m)
     k = reference.stroke(600).sample(3601)
     motor = cat.motor("055U2B30")
     load = Load(0.191)

@@ -1,4 +1,4 @@
-"""Known optima of a rest-to-rest move (DESIGN.md, "Known optima"), each a problem file under
+"""Known optima of a rest-to-rest move (docs/architecture.md, "Known optima"), each a problem file under
 problems/known_optima/ solved at the file's default mesh; within 0.5 %."""
 
 from __future__ import annotations
@@ -15,10 +15,10 @@ KNOWN = Path(__file__).resolve().parents[1] / "problems" / "known_optima"
 
 # (file, peak-acceleration coefficient C_a = max|a| T^2/h, source)
 COEFFICIENTS = [
-    ("min_peak_accel.toml", 4.0),  # DESIGN.md: constant acceleration (parabolic), 4 h/T^2
-    ("min_accel_squared.toml", 6.0),  # DESIGN.md: cubic 3-2 polynomial, 6 h/T^2
-    ("min_jerk.toml", 5.7735),  # DESIGN.md: 3-4-5 polynomial, 5.7735 h/T^2
-    ("min_snap.toml", 7.5132),  # DESIGN.md: 4-5-6-7 polynomial, 7.5132 h/T^2
+    ("min_peak_accel.toml", 4.0),  # docs/architecture.md: constant acceleration (parabolic), 4 h/T^2
+    ("min_accel_squared.toml", 6.0),  # docs/architecture.md: cubic 3-2 polynomial, 6 h/T^2
+    ("min_jerk.toml", 5.7735),  # docs/architecture.md: 3-4-5 polynomial, 5.7735 h/T^2
+    ("min_snap.toml", 7.5132),  # docs/architecture.md: 4-5-6-7 polynomial, 7.5132 h/T^2
     ("jerk_bounded_peak_accel.toml", 4.445),  # issue 4 "what we already measured": 4.445 with modified sine's jerk bound
 ]
 
@@ -47,7 +47,7 @@ def test_jerk_bounded_optimum_beats_modified_sine():
 
 
 def test_inertia_matching_radius():
-    # DESIGN.md: (J/r + m r) a is smallest at r = sqrt(J/m); J = 0.23 kg cm^2 (055U2B30, thesis Tab. 4.5), m = 0.2 kg
+    # docs/architecture.md: (J/r + m r) a is smallest at r = sqrt(J/m); J = 0.23 kg cm^2 (055U2B30, thesis Tab. 4.5), m = 0.2 kg
     design = solve_design(load_problem(KNOWN / "inertia_matching.toml"))
     r_star = math.sqrt(0.23e-4 / 0.2)
     assert design.radius == pytest.approx(r_star, rel=0.005)

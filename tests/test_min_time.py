@@ -19,7 +19,7 @@ KNOWN = ROOT / "problems" / "known_optima"
 
 
 def test_min_time_known_optimum_is_the_parabolic_closed_form():
-    # DESIGN.md known optimum: the shortest rest-to-rest move under |a| <= a_max is the parabolic law,
+    # docs/architecture.md known optimum: the shortest rest-to-rest move under |a| <= a_max is the parabolic law,
     # C_a = 4, T_min = sqrt(4 h / a_max); here a_max = 200 % of the 055U2B30's rated 1.2 N m (thesis
     # Tab. 4.5: J = 0.23 kg cm^2) over the pure inertia J/r + m r of the file (28 teeth, m = 0.2 kg)
     design = solve_design(load_problem(KNOWN / "min_time.toml"))

@@ -1,8 +1,8 @@
 """Studies over many solves: the stitch-rate sweep (:func:`sweep_design`, :func:`fastest_feasible`),
 the accuracy/time study of the mesh (:func:`mesh_study`) and what quietness costs (:func:`impact_study`).
 
-Each solve is a :func:`~.solve.solve_design` with the same default handover error terms
-(``error_terms=None``: the problem's). Figures: :mod:`strokeopt.report.design`.
+The sweep and the impact study solve through the one verified pipeline (:func:`.verified.solve_verified`);
+the mesh study times the bare collocation (the file's motor and pulley). Figures: :mod:`strokeopt.report.design`.
 """
 
 from __future__ import annotations
@@ -15,15 +15,17 @@ from ..design.nlp import clear_cache
 from ..design.settings import DesignSettings
 from ..design.solve import solve_design
 from ..errors import ProblemError, SolverError
+from .verified import solve_verified
 
 
 def sweep_design(problem, spms, *, objective: str | None = None, settings: DesignSettings | None = None,
-                 progress=None, error_terms=None) -> list[dict]:
-    """Solve at each stitch rate in ``spms`` (ascending), each solve warm-started from the previous.
+                 progress=None) -> list[dict]:
+    """The verified design (:func:`~.verified.solve_verified`) at each stitch rate in ``spms`` (ascending),
+    each solve warm-started from the previous.
 
-    Returns one row per rate: ``spm``, ``feasible``, the objective, motor, pulley, peak and RMS torque,
-    and for an infeasible rate the reason. ``progress``: a callable wrapping the iterable (tqdm);
-    ``error_terms``: as for :func:`~.solve.solve_design` (None: the problem's).
+    Returns one row per rate: ``spm``, ``feasible`` (solved, within every limit and its verification
+    passed), the objective, motor, pulley, peak and RMS torque, the handover error of the full servo
+    simulation, and for an infeasible rate the reason. ``progress``: a callable wrapping the iterable (tqdm).
     """
     rows = []
     warm = None
@@ -31,22 +33,23 @@ def sweep_design(problem, spms, *, objective: str | None = None, settings: Desig
     for spm in it:
         t0 = time.perf_counter()
         try:
-            d = solve_design(problem, objective=objective, spm=spm, settings=settings, warm_start=warm,
-                             error_terms=error_terms)
+            verified = solve_verified(problem, objective=objective, spm=spm, settings=settings, warm_start=warm,
+                                      compare=False)
         except SolverError as exc:
             first, *rest = exc.reason.splitlines()  # the first line says the worst limit; details follow
             rows.append({"spm": float(spm), "feasible": False, "reason": first,
                          **({"details": [r.strip() for r in rest]} if rest else {}),
                          "solve_time_s": time.perf_counter() - t0})
             continue
-        warm = d
-        if d.status == "limits exceeded":
-            rows.append({"spm": float(spm), "feasible": False, "reason": d.notes[0],
+        d = warm = verified.design
+        if not verified.ok:
+            rows.append({"spm": float(spm), "feasible": False, "reason": verified.verdict,
                          "solve_time_s": time.perf_counter() - t0})
             continue
         rows.append({"spm": float(spm), "feasible": True, "objective_value": d.objective_value,
                      "motor": d.motor, "pulley_teeth": d.pulley_teeth, "peak_torque_N_m": d.check_value("peak_torque"),
                      "rms_torque_N_m": d.check_value("rms_torque"),
+                     "handover_error_mm": None if verified.accuracy is None else verified.accuracy.handover_error * 1e3,
                      "a_max_m_s2": max(m.a_max for m in d.moves), "solve_time_s": time.perf_counter() - t0})
     return rows
 
@@ -102,15 +105,13 @@ IMPACT_POINTS_MAX = 20
 
 
 def impact_study(problem, velocities, *, objective: str | None = None, spm: float | None = None,
-                 settings: DesignSettings | None = None, progress=None, error_terms=None) -> list[dict]:
+                 settings: DesignSettings | None = None, progress=None) -> list[dict]:
     """What quietness costs: the design solved under each impact-velocity limit of ``velocities`` [m/s]
     (``[design.contact] impact_velocity_max_m_s`` replaced, the rest of ``[design.contact]`` and
     ``[design.free]`` as in the file), from the loosest to the tightest, each warm-started from the previous
     and verified by re-simulation (contact/verify.py). One row per limit: the objective, peak torque, the free
     parameters found, the simulated impact velocity and lag, the verdict; an infeasible limit with its reason.
     """
-    from ..contact.verify import design_verification
-
     settings = settings or getattr(problem, "design", None) or DesignSettings()
     if settings.contact is None:
         raise ProblemError(str(problem.file), "design.contact", "the impact study needs a [design.contact] section "
@@ -123,13 +124,13 @@ def impact_study(problem, velocities, *, objective: str | None = None, spm: floa
         limited = replace(settings, contact=replace(settings.contact, impact_velocity_max=vmax))
         row = {"impact_velocity_max_m_s": vmax}
         try:
-            d = _solved_afresh_if_short(problem, objective, spm, limited, warm, error_terms)
+            verified = _solved_afresh_if_short(problem, objective, spm, limited, warm)
         except SolverError as exc:
             rows.append({**row, "feasible": False, "reason": exc.reason.splitlines()[0],
                          "solve_time_s": time.perf_counter() - t0})
             continue
-        warm = d
-        block = design_verification(d)
+        d = warm = verified.design
+        block = verified.verification
         crit = {c["criterion"]: c for c in (block or {}).get("criteria", [])}
         row.update({"feasible": d.status != "limits exceeded", "objective_value": d.objective_value,
                     "objective_unit": d.objective_unit, "peak_torque_N_m": d.check_value("peak_torque"),
@@ -145,22 +146,25 @@ def impact_study(problem, velocities, *, objective: str | None = None, spm: floa
     return sorted(rows, key=lambda r: r["impact_velocity_max_m_s"])
 
 
-def _solved_afresh_if_short(problem, objective, spm, settings, warm, error_terms):
-    """The design warm-started from ``warm``; where that fails or ends short of a limit (the previous limit's
-    stroke may start IPOPT where it cannot restore feasibility), solved afresh, kept if it does better."""
+def _solved_afresh_if_short(problem, objective, spm, settings, warm):
+    """The verified design warm-started from ``warm``; where that fails or ends short of a limit (the previous
+    limit's stroke may start IPOPT where it cannot restore feasibility), solved afresh, kept if it does better."""
+    def solve(start):
+        return solve_verified(problem, objective=objective, spm=spm, settings=settings, warm_start=start,
+                              compare=False)
+
     warmed = None
     try:
-        warmed = solve_design(problem, objective=objective, spm=spm, settings=settings, warm_start=warm,
-                              error_terms=error_terms)
+        warmed = solve(warm)
     except SolverError:
         if warm is None:
             raise
-    if warmed is not None and (warm is None or warmed.status != "limits exceeded"):
+    if warmed is not None and (warm is None or warmed.design.status != "limits exceeded"):
         return warmed
     try:
-        fresh = solve_design(problem, objective=objective, spm=spm, settings=settings, error_terms=error_terms)
+        fresh = solve(None)
     except SolverError:
         if warmed is None:
             raise
         return warmed
-    return fresh if warmed is None or fresh.status != "limits exceeded" else warmed
+    return fresh if warmed is None or fresh.design.status != "limits exceeded" else warmed

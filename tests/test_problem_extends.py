@@ -1,0 +1,81 @@
+"""``extends`` in problem files: a variant states only what differs from its base; in-memory variants
+(``Problem.with_overrides``) are validated like a file's and never re-read it."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+from strokeopt import ProblemError, load_problem
+from strokeopt.cli.main import main
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+
+
+def test_contact_design_file_holds_only_what_differs():
+    # the contact-design file extends the reference: under 80 lines, and its merged data are the reference's
+    # with its own tables merged in (the sections it does not state are the reference's, key for key)
+    text = (PROBLEMS / "deco2000_contact_design.toml").read_text(encoding="utf-8")
+    assert len(text.splitlines()) < 80 and 'extends = "deco2000_needle_bar.toml"' in text
+    derived = load_problem(PROBLEMS / "deco2000_contact_design.toml")
+    base = load_problem(PROBLEMS / "deco2000_needle_bar.toml")
+    for section in ("timing", "transmission", "drive", "servo", "model", "scenes"):
+        assert derived.data[section] == base.data[section], section
+    assert derived.spm == 600 and base.spm == 500
+    assert derived.design.motor_choice == "fixed" and base.design.motor_choice == "enumerate"
+    assert derived.design.objective == base.design.objective == "min_peak_torque"  # merged from the base
+
+
+def _copy(tmp_path, name="base.toml") -> Path:
+    shutil.copy(PROBLEMS / "known_optima" / "min_jerk.toml", tmp_path / name)
+    return tmp_path / name
+
+
+def test_extends_merges_tables_and_replaces_arrays(tmp_path):
+    _copy(tmp_path)
+    (tmp_path / "v.toml").write_text('extends = "base.toml"\n[machine]\nspm = 45\n'
+                                     '[[timing.intervals]]\nname = "rise"\nspan_deg = 90\nstroke_mm = 500\n'
+                                     'direction = "up"\n[[timing.intervals]]\nname = "dwell"\nspan_deg = 90\n'
+                                     '[[timing.intervals]]\nname = "return"\nspan_deg = 180\nstroke_mm = 500\n'
+                                     'direction = "down"\n', encoding="utf-8")
+    p = load_problem(tmp_path / "v.toml", ["design.objective=\"min_peak_accel\""])
+    assert p.spm == 45 and p.data["machine"]["cam_revolutions_per_stitch"] == 1  # table merged key by key
+    assert [i.name for i in p.timing.intervals] == ["rise", "dwell", "return"]  # the array replaced whole
+    assert p.design.objective == "min_peak_accel" and p.default_law.name == "poly5"
+
+
+@pytest.mark.parametrize("text, words", [
+    ('extends = "b.toml"\n', "cycle of extends: a.toml -> b.toml -> a.toml"),
+    ('extends = "missing.toml"\n', "'missing.toml': no such file"),
+    ("extends = 3\n", "must be the name of a problem file"),
+])
+def test_bad_extends_is_one_line_exit_2(tmp_path, capsys, text, words):
+    (tmp_path / "a.toml").write_text(text, encoding="utf-8")
+    (tmp_path / "b.toml").write_text('extends = "a.toml"\n', encoding="utf-8")
+    with pytest.raises(ProblemError) as err:
+        load_problem(tmp_path / "a.toml")
+    assert err.value.field == "extends" and words in str(err.value)
+    assert main(["kinematics", str(tmp_path / "a.toml"), "--plot", "none"]) == 2
+    out = capsys.readouterr().err.strip().splitlines()
+    assert len(out) == 1 and "a.toml" in out[0] and "extends" in out[0] and words in out[0]
+
+
+def test_a_base_with_an_error_is_named(tmp_path):
+    base = _copy(tmp_path)
+    base.write_text(base.read_text(encoding="utf-8").replace("spm = 30", "spm = -30"), encoding="utf-8")
+    (tmp_path / "v.toml").write_text('extends = "base.toml"\n', encoding="utf-8")
+    with pytest.raises(ProblemError, match="machine.spm"):
+        load_problem(tmp_path / "v.toml")
+
+
+def test_with_overrides_is_validated_and_reads_no_file(tmp_path):
+    path = _copy(tmp_path)
+    problem = load_problem(path, ["machine.spm=40"])
+    path.unlink()  # a variant is made in memory: the file is gone and with_overrides still works
+    faster = problem.with_overrides(["machine.spm=50"])
+    assert (problem.spm, faster.spm) == (40, 50) and faster.overrides == ("machine.spm=40", "machine.spm=50")
+    assert problem.with_overrides([]) is problem
+    with pytest.raises(ProblemError, match="machine.spm"):
+        problem.with_overrides(["machine.spm=-1"])
