@@ -1,0 +1,184 @@
+"""Loop closure of a linkage as CasADi SX, built from its data (structure.py's equations).
+
+Symbols: ``q`` the coordinates of the unknown joints, ``theta`` the input angle, ``p`` the reference
+coordinates of every joint (so one set of Functions serves every geometry of a topology: analysis,
+screening and synthesis). A distance row is ``(|pa - pb|^2 - L^2) / (2 L)``: metres, and at closure
+its gradient is the unit vector along the link, so the Jacobian's rows are normalised and the
+determinant of a dyad's block is the sine of Alt's transmission angle.
+
+Derivatives with respect to the input are algorithmic: ``q' = -Phi_q^-1 Phi_theta`` (the implicit
+function theorem) written as an SX expression of (q, theta), and every higher derivative is the total
+derivative ``D e = e_q q' + e_theta`` of the expression before, applied by AD (never by hand).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from .model import Linkage
+from .structure import Structure
+
+NEWTON_STEPS = 5      # unrolled Newton iterations per continuation step
+
+
+def cross(a, b):
+    return a[0] * b[1] - a[1] * b[0]
+
+
+def perp(a):
+    return ca.vertcat(-a[1], a[0])
+
+
+def rotate(v, angle):
+    c, s = ca.cos(angle), ca.sin(angle)
+    return ca.vertcat(c * v[0] - s * v[1], s * v[0] + c * v[1])
+
+
+def relative_angle(e0, e):
+    """The angle [rad] from direction ``e0`` to ``e`` in (-pi, pi], smooth in ``e``."""
+    return ca.atan2(cross(e0, e), ca.dot(e0, e))
+
+
+class Closure:
+    """Symbolic closure of one linkage topology; ``p`` carries the geometry."""
+
+    def __init__(self, linkage: Linkage, structure: Structure):
+        self.linkage = linkage
+        self.structure = structure
+        nq, nj = 2 * len(structure.unknown), 2 * len(linkage.joints)
+        self.q = ca.SX.sym("q", nq)
+        self.theta = ca.SX.sym("theta")
+        self.p = ca.SX.sym("p", nj)
+        self.phi = self.residual(self.q, self.theta, self.p)
+        self.phi_q = ca.jacobian(self.phi, self.q)
+        self.qd = self.block_solve(self.phi_q, -ca.jacobian(self.phi, self.theta))
+        self._functions = {}
+
+    def block_solve(self, a, b):
+        """``a^-1 b`` by forward substitution over the groups (block-triangular order): a small
+        expression, so its derivatives by AD stay small too."""
+        x = [None] * a.shape[0]
+        for g in self.structure.groups:
+            rows, cols = list(g.rows), list(g.cols)
+            rhs = b[rows]
+            for j, xj in enumerate(x):
+                if xj is not None and j not in cols:
+                    rhs = rhs - a[rows, j] * xj
+            sol = ca.solve(a[rows, cols], rhs)
+            for k, c in enumerate(cols):
+                x[c] = sol[k]
+        return ca.vertcat(*x)
+
+    # -- geometry ------------------------------------------------------------------------------
+    def ref(self, p, name):
+        i = self.linkage.joint_index(name)
+        return ca.vertcat(p[2 * i], p[2 * i + 1])
+
+    def points(self, q, theta, p) -> dict:
+        """Every joint's position as a 2-vector expression of (q, theta, p)."""
+        lk, st = self.linkage, self.structure
+        crank = lk.link(lk.crank.link)
+        pivot = self.ref(p, lk.crank.pivot)
+        out = {}
+        for j in lk.joints:
+            if j.ground:
+                out[j.name] = self.ref(p, j.name)
+            elif j.name in crank.joints:
+                out[j.name] = pivot + rotate(self.ref(p, j.name) - pivot, theta - lk.crank.reference_angle)
+            elif j.name in st.unknown:
+                k = st.unknown.index(j.name)
+                out[j.name] = ca.vertcat(q[2 * k], q[2 * k + 1])
+        return out
+
+    def residual(self, q, theta, p):
+        pts = self.points(q, theta, p)
+        rows = []
+        for eq in self.structure.equations:
+            e0 = self.ref(p, eq.b) - self.ref(p, eq.a)
+            if eq.kind == "distance":
+                d = pts[eq.b] - pts[eq.a]
+                length2 = ca.dot(e0, e0)
+                rows.append((ca.dot(d, d) - length2) / (2 * ca.sqrt(length2)))
+            else:
+                d0 = self.ref(p, eq.c) - self.ref(p, eq.a)
+                alpha = ca.dot(d0, e0) / ca.dot(e0, e0)
+                beta = cross(e0, d0) / ca.dot(e0, e0)
+                e = pts[eq.b] - pts[eq.a]
+                rows.append(pts[eq.c] - (pts[eq.a] + alpha * e + beta * perp(e)))
+        return ca.vertcat(*rows)
+
+    def total_derivative(self, expr):
+        """d expr / d theta along the closed linkage: expr_q q' + expr_theta (by AD)."""
+        return ca.jtimes(expr, self.q, self.qd) + ca.jacobian(expr, self.theta)
+
+    def derivatives(self, expr, order: int = 3) -> list:
+        out = [expr]
+        for _ in range(order):
+            out.append(self.total_derivative(out[-1]))
+        return out
+
+    def jet_function(self, name: str, expr, order: int = 3) -> ca.Function:
+        """``expr(q, theta, p)`` and its first ``order`` derivatives along the cycle, from the pose's
+        derivatives: expr is evaluated on the Taylor polynomial of q(theta + s) (exact to ``order``)
+        and differentiated in s at 0 by AD. Inputs q, dq, d2q, d3q, theta, p."""
+        s = ca.SX.sym("s")
+        dqs = [ca.SX.sym(f"d{k}q", self.q.shape[0]) for k in range(1, 4)]
+        qs = self.q + dqs[0] * s + dqs[1] * s ** 2 / 2 + dqs[2] * s ** 3 / 6
+        e = ca.substitute(expr, ca.vertcat(self.q, self.theta), ca.vertcat(qs, self.theta + s))
+        outs = [e]
+        for _ in range(order):
+            outs.append(ca.jacobian(outs[-1], s))
+        outs = [ca.substitute(o, s, 0) for o in outs]
+        names = ["y"] + [f"d{k}y" for k in range(1, order + 1)]
+        return ca.Function(name, [self.q, *dqs, self.theta, self.p], outs,
+                           ["q", "dq", "d2q", "d3q", "theta", "p"], names)
+
+    # -- numbers -------------------------------------------------------------------------------
+    def function(self, name: str) -> ca.Function:
+        if name not in self._functions:
+            self._functions[name] = getattr(self, "_make_" + name)()
+        return self._functions[name]
+
+    def _make_residual(self) -> ca.Function:
+        return ca.Function("closure", [self.q, self.theta, self.p], [self.phi], ["q", "theta", "p"], ["phi"])
+
+    def _make_step(self) -> ca.Function:
+        """One continuation step: first-order prediction from (q0, theta0) to theta1, then Newton.
+        Returns the pose, its largest residual [m], the Newton correction and the move the transfer
+        function predicts (|q'| at both ends times the step: at a reversal q' passes 0 in between)."""
+        q0, t0, t1 = ca.SX.sym("q0", self.q.shape[0]), ca.SX.sym("t0"), ca.SX.sym("t1")
+        qd0 = ca.substitute(self.qd, ca.vertcat(self.q, self.theta), ca.vertcat(q0, t0))
+        pred = q0 + qd0 * (t1 - t0)
+        q = pred
+        res = ca.Function("r", [self.q, self.theta, self.p], [self.phi, self.phi_q])
+        for _ in range(NEWTON_STEPS):
+            phi, jac = res(q, t1, self.p)
+            q = q - ca.solve(jac, phi)
+        phi, _ = res(q, t1, self.p)
+        qd1 = ca.substitute(self.qd, ca.vertcat(self.q, self.theta), ca.vertcat(q, t1))
+        move = (ca.norm_2(qd0) + ca.norm_2(qd1)) * ca.fabs(t1 - t0)
+        return ca.Function("continuation_step", [q0, t0, t1, self.p],
+                           [q, ca.mmax(ca.fabs(phi)), ca.norm_2(q - pred), move],
+                           ["q0", "theta0", "theta1", "p"], ["q", "residual", "correction", "move"])
+
+    def _make_derivatives(self) -> ca.Function:
+        q1, q2, q3 = self.derivatives(self.q)[1:]
+        return ca.Function("pose_derivatives", [self.q, self.theta, self.p], [q1, q2, q3],
+                           ["q", "theta", "p"], ["dq", "d2q", "d3q"])
+
+    def group_indices(self, q, theta, p) -> list:
+        """Per group (placements excluded): |det| of its normalised closure block, 1 at best, 0 at a toggle."""
+        phi_q = ca.jacobian(self.residual(q, theta, p), q)
+        out = []
+        for g in self.structure.groups:
+            if g.kind != "placement":
+                out.append(ca.fabs(ca.det(phi_q[list(g.rows), list(g.cols)])))
+        return out
+
+    def _make_quality(self) -> ca.Function:
+        idx = self.group_indices(self.q, self.theta, self.p)
+        return ca.Function("transmission_index", [self.q, self.theta, self.p], [ca.vertcat(*idx)],
+                           ["q", "theta", "p"], ["index"])
+
+    def quality_groups(self) -> list:
+        return [g for g in self.structure.groups if g.kind != "placement"]
