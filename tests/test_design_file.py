@@ -56,3 +56,25 @@ def test_a_set_against_the_design_is_an_error(design_dir, reference_path, extra,
 
 def test_load_problem_takes_one_override_as_a_string(reference_path):
     assert load_problem(reference_path, "machine.spm=600").spm == 600.0
+
+
+@pytest.mark.parametrize("edit, words", [
+    ({"schema_version": 99}, "schema_version: 99: written by a newer strokeopt; this one reads design files up to "
+                             "schema 2"),
+    ({"schema_version": "2"}, "schema_version: must be a positive whole number, got '2'"),
+    ({"schema_version": None, "version": None}, "schema_version: is missing"),
+])
+def test_design_file_schema_is_checked(tmp_path, capsys, design_dir, edit, words):
+    # one versioned schema: a newer file is refused saying what to do, a file of the first schema (no
+    # schema_version, "version": 1) is read as it is
+    data = json.loads((design_dir / "design.json").read_text(encoding="utf-8"))
+    assert data["schema_version"] == 2 and "verdict" in data and "not_judged" in data
+    old = {k: v for k, v in data.items() if k != "schema_version"}
+    (tmp_path / "old.json").write_text(json.dumps({**old, "version": 1}), encoding="utf-8")
+    assert main(["verify", str(tmp_path / "old.json"), "--json", "--plot", "none"]) in (0, 1)
+    capsys.readouterr()
+    bad = {k: v for k, v in {**data, **edit}.items() if v is not None}
+    (tmp_path / "bad.json").write_text(json.dumps(bad), encoding="utf-8")
+    assert main(["verify", str(tmp_path / "bad.json"), "--plot", "none"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "bad.json" in err[0] and words in err[0]

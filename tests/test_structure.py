@@ -14,7 +14,11 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "strokeopt"
 
 #: Packages that compute (they return data); they never import what reports, measures or parses commands.
-DOMAIN = ("io", "motion", "drive", "design", "contact", "servo")
+DOMAIN = ("io", "motion", "drive", "design", "contact", "servo", "linkage", "problem", "studies", "files")
+#: The floors of docs/architecture.md: a module imports only from its own floor or below (the ground is 0).
+FLOORS = {"errors": 0, "_casadi": 0, "_stdout": 0, "io": 0, "motion": 1, "drive": 2, "linkage": 2, "contact": 3,
+          "servo": 3, "design": 4, "problem": 5, "studies": 6, "files": 7, "report": 8, "cli": 9, "bench": 9,
+          "__main__": 10}
 #: Top-level names the domain must not import.
 ABOVE_DOMAIN = ("report", "bench", "cli")
 MAX_LINES = 500
@@ -146,3 +150,22 @@ def test_nothing_imports_the_command_line():
 def test_no_module_over_the_size_limit():
     big = {m: n for m, p in _modules().items() if (n := len(p.read_text(encoding="utf-8").splitlines())) > MAX_LINES}
     assert not big, f"modules over {MAX_LINES} lines: {big}"
+
+
+def _top(module: str) -> str:
+    """The top-level name of a module of the package: ``strokeopt.design.solve`` -> ``design``."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+def test_every_package_has_a_floor():
+    missing = sorted({_top(m) for m in _modules() if m != "strokeopt"} - set(FLOORS))
+    assert not missing, f"packages without a floor in FLOORS (docs/architecture.md): {missing}"
+
+
+def test_imports_point_down_the_floors():
+    # no package cycle: each arrow goes to the importer's own floor or below (the public __init__ excepted)
+    bad = [f"{m} line {line} imports {t} (floor {FLOORS[_top(t)]} above {FLOORS[_top(m)]})"
+           for m, edges in _graph().items() if m != "strokeopt"
+           for t, line in edges if t != "strokeopt" and FLOORS.get(_top(t), 0) > FLOORS.get(_top(m), 0)]
+    assert not bad, "\n".join(bad)

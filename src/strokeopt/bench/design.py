@@ -87,9 +87,9 @@ def _bench_design_expand_jit() -> BenchResult:
     for label, opts in variants:
         clear_cache()
         t0 = time.perf_counter()
-        d = solve_design(p, solver_options=opts)
+        d = solve_design(p, settings=_with_options(p, opts))
         build_solve = time.perf_counter() - t0
-        resolve = best_time(lambda o=opts: solve_design(p, solver_options=o, warm_start=d), repeat=3)
+        resolve = best_time(lambda o=opts: solve_design(p, settings=_with_options(p, o), warm_start=d), repeat=3)
         times[label] = (build_solve, resolve)
         rows.append(BenchRow(label + ": build + solve", build_solve, f"C_a = {d.moves[0].C_a:.4f}"))
         rows.append(BenchRow(label + ": re-solve (built)", resolve))
@@ -181,7 +181,7 @@ def _bench_design_step() -> BenchResult:
     def cold(options=None):
         clear_cache()
         t0 = time.perf_counter()
-        d = solve_design(p, solver_options=options)
+        d = solve_design(p, settings=_with_options(p, options))
         return time.perf_counter() - t0, d
 
     t_file, d = min((cold() for _ in range(2)), key=lambda r: r[0])
@@ -194,3 +194,13 @@ def _bench_design_step() -> BenchResult:
                        measured_s=t_file, ratio=t_mx / t_file, ratio_label="not expanded / expanded",
                        notes=["one design: both moves (step up, step back) in one NLP, the torque through the "
                               "screw and lever's J(phi), J'(phi) at every collocation node"])
+
+
+def _with_options(problem, options: dict):
+    """The problem's [design] settings with ``options`` over its solver options (CasADi/IPOPT)."""
+    from dataclasses import replace
+
+    from ..design.settings import DesignSettings
+
+    settings = problem.design or DesignSettings()
+    return replace(settings, solver_options={**settings.solver_options, **options})

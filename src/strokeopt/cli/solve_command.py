@@ -122,7 +122,9 @@ def cmd_solve(args) -> int:
     if args.out is not None:
         from ..files.design_file import write_design
 
-        for path in write_design(design, args.out, spec=cam_spec, extra={"comparison": comparison, "drive": chosen}):
+        for path in write_design(design, args.out, spec=cam_spec, extra={
+                "comparison": comparison, "drive": chosen, "verdict": verified.verdict,
+                "not_judged": summary["not_judged"]}):
             print(f"written {path}", file=sys.stderr if args.json else sys.stdout)
         from ..report.design_report import gather, write_report
 

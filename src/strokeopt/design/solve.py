@@ -35,7 +35,6 @@ from dataclasses import replace
 
 import casadi as ca
 
-from .collocation import Mesh
 from .contact_limits import CONTACT_LIMITS
 from .fine_grid import move_results
 from .free import free_overrides, free_report
@@ -54,48 +53,21 @@ from ..io.plain import format_value
 
 
 def solve_design(problem, *, objective: str | None = None, spm: float | None = None,
-                 settings: DesignSettings | None = None, mesh: Mesh | None = None, warm_start=None,
-                 solver_options: dict | None = None, verbose: bool = False, progress=None,
-                 error_terms=None, handover_check=None) -> Design:
+                 settings: DesignSettings | None = None, warm_start=None, verbose: bool = False, progress=None,
+                 handover_check=None) -> Design:
     """Solve the design problem of ``problem`` at ``spm`` (default: the file's).
 
-    ``objective`` overrides ``[design] objective``; ``mesh`` overrides its mesh;
-    ``warm_start`` is a previous :class:`Design` (or its move solutions) to start from;
-    ``solver_options`` are passed to ``casadi.nlpsol`` over the defaults; ``progress`` wraps the
-    motors of a catalogue search (tqdm); ``error_terms``: the handover error terms
-    (:class:`~.request.ErrorTerm`; None: ``problem.error_terms``; ``()``: the accuracy is not checked).
-    ``handover_check``: a callable ``design -> (error [m], what)`` giving the handover error of a full
-    simulation of the design (the command line passes the servo model's, which this package does not
-    import); the check table then reports that number, with the design's own terms beside it.
-    Raises :class:`SolverError` naming the constraint that cannot be met.
+    ``objective`` overrides ``[design] objective``; ``settings`` replaces ``[design]`` (its mesh, its
+    ``solver_options`` passed to ``casadi.nlpsol`` over the defaults); ``warm_start`` is a previous
+    :class:`Design` (or its move solutions) to start from; ``progress`` wraps the motors of a catalogue
+    search (tqdm). The handover error terms are ``problem.error_terms`` (:class:`~.request.ErrorTerm`; a
+    problem with none does not check the accuracy). ``handover_check``: a callable ``design -> (error [m],
+    what)`` giving the handover error of a full simulation of the design (the verified pipeline passes the
+    servo model's, which this package does not import); the check table then reports that number, with the
+    design's own terms beside it. Raises :class:`SolverError` naming the constraint that cannot be met.
     """
-    settings = settings or getattr(problem, "design", None) or DesignSettings()
-    objective = objective or settings.objective
-    if objective not in OBJECTIVES:
-        raise unknown_objective_error(objective)
-    spm = float(spm if spm is not None else problem.spm)
-    if not (math.isfinite(spm) and spm > 0):
-        raise ProblemError("--spm", "", f"must be positive, got {spm!r}")
-    terms = tuple(getattr(problem, "error_terms", ()) if error_terms is None else error_terms)
-    mesh = mesh or settings.mesh
-    warm = warm_start.solutions if isinstance(warm_start, Design) else warm_start
-    radius0 = warm_start.radius if isinstance(warm_start, Design) else None
-    options = _solver_options(settings, solver_options, verbose)
-    drive = DriveSetup(problem, settings) if getattr(problem, "drive", None) is not None else None
-    if drive is None and objective in TORQUE_OBJECTIVES:
-        raise needs_drive_error(problem, objective)
-    if drive is not None:
-        _check_fixed_accuracy(problem, settings, terms)
-        if needs_terms(objective) and (settings.motor_choice != "fixed" or (
-                settings.pulley != "fixed" and drive.own_transmission is None)):
-            raise ProblemError(str(problem.file), "design.objective", f"{objective} compares strokes on one drive (the "
-                               "servo's error term is exact for a fixed motor and pulley only): give --motor and "
-                               "--pulley-teeth, or design.motor_choice = \"fixed\" and design.pulley = \"fixed\"")
-    # a min_time warm-started from a design that held its accuracy holds it from the first solve: the rate a
-    # solve without it finds is the one the accuracy then pulls back from (continuation, servo/tradeoff.py)
-    held = free_time(objective) and bool(getattr(warm_start, "accuracy_enforced", False))
-    req = SolveRequest(problem, spm, settings, mesh, objective, drive, None, options, warm, radius0,
-                       error_terms=terms, enforce_accuracy=held)
+    req = _request(problem, objective, spm, settings, warm_start, verbose)
+    settings, drive, terms = req.settings, req.drive, req.error_terms
     t_start = time.perf_counter()
     notes: list[str] = []
     if drive is None:
@@ -115,29 +87,72 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     if free:  # the design's problem: the file's with the values found (recorded as --set texts in design.json)
         problem = problem.with_overrides(free_overrides(problem.model, best.free_values))
     nlp, sols = best.nlp, best.sols
-    stroke = stroke_from_solutions(problem, spm, sols, label=f"optimal ({objective})")
+    stroke = stroke_from_solutions(problem, spm, sols, label=f"optimal ({req.objective})")
     moves = move_results(nlp.request.moves, sols)
-    design = Design(problem, spm, objective, best.value, nlp.graph.unit, stroke, moves, nlp.request.mesh,
+    design = Design(problem, spm, req.objective, best.value, nlp.graph.unit, stroke, moves, nlp.request.mesh,
                     best.status, wall, best.iterations, fine_grid=best.fine, pulley_teeth=teeth, pitch_diameter=pd,
                     motor=None if motor is None else motor.name, notes=notes)
     design.motor_spec = motor
     design.settings = settings
     design.accuracy_enforced = bool(nlp.request.enforce_accuracy and terms)
     design.free_parameters = free
-    for row in free:
+    _settings_notes(design, settings, nlp, drive)
+    design.checks, design.active_constraints = _report_checks(best)
+    if handover_check is not None and any(c["name"].startswith(HANDOVER_CHECK) for c in design.checks):
+        design.checks = _verified_handover(design, *handover_check(design), settings.check_tolerance)
+    _judge(design, best, drive, terms)
+    return design
+
+
+def _request(problem, objective, spm, settings, warm_start, verbose) -> SolveRequest:
+    """The solve request of :func:`solve_design`: its arguments checked, the drive set up."""
+    settings = settings or getattr(problem, "design", None) or DesignSettings()
+    objective = objective or settings.objective
+    if objective not in OBJECTIVES:
+        raise unknown_objective_error(objective)
+    spm = float(spm if spm is not None else problem.spm)
+    if not (math.isfinite(spm) and spm > 0):
+        raise ProblemError("--spm", "", f"must be positive, got {spm!r}")
+    terms = tuple(getattr(problem, "error_terms", ()))
+    warm = warm_start.solutions if isinstance(warm_start, Design) else warm_start
+    radius0 = warm_start.radius if isinstance(warm_start, Design) else None
+    options = _solver_options(settings, None, verbose)
+    drive = DriveSetup(problem, settings) if getattr(problem, "drive", None) is not None else None
+    if drive is None and objective in TORQUE_OBJECTIVES:
+        raise needs_drive_error(problem, objective)
+    if drive is not None:
+        _check_fixed_accuracy(problem, settings, terms)
+        if needs_terms(objective) and (settings.motor_choice != "fixed" or (
+                settings.pulley != "fixed" and drive.own_transmission is None)):
+            raise ProblemError(str(problem.file), "design.objective", f"{objective} compares strokes on one drive (the "
+                               "servo's error term is exact for a fixed motor and pulley only): give --motor and "
+                               "--pulley-teeth, or design.motor_choice = \"fixed\" and design.pulley = \"fixed\"")
+    # a min_time warm-started from a design that held its accuracy holds it from the first solve: the rate a
+    # solve without it finds is the one the accuracy then pulls back from (continuation, studies/tradeoff.py)
+    held = free_time(objective) and bool(getattr(warm_start, "accuracy_enforced", False))
+    return SolveRequest(problem, spm, settings, settings.mesh, objective, drive, None, options, warm, radius0,
+                        error_terms=terms, enforce_accuracy=held)
+
+
+def _settings_notes(design: Design, settings: DesignSettings, nlp, drive) -> None:
+    """The notes that say what the settings did: free parameters found, the jerk bound, the torque reserve."""
+    for row in design.free_parameters:
         design.notes.append(f"free model parameter {row['parameter']} = {row['value']:.5g} (bounds {row['lower']:g} "
                             f"to {row['upper']:g})" + (f": at its {row['at_bound']} bound" if row["at_bound"] else ""))
     if settings.jerk_max_from_law and settings.jerk_law_spm:
         design.notes.append(f"jerk bound: the peak jerk of each move's law at {settings.jerk_law_spm:g} spm ([design] "
                             f"jerk_max_from_law = {settings.jerk_law_spm:g}), in m/s^3 at every rate (" + ", ".join(
                                 f"move {mv.index} {mv.jerk_bound:.4g}" for mv in nlp.request.moves) + ")")
-    if settings.torque_reserve and req.drive is not None:
+    if settings.torque_reserve and drive is not None:
         design.notes.append(f"torque reserve: the design uses at most {100 * (1 - settings.torque_reserve):g} % of "
                             f"the torque limit, {100 * settings.torque_reserve:g} % kept in reserve for the servo "
                             "loop ([design] torque_reserve_pct)")
-    design.checks, design.active_constraints = _report_checks(best)
-    if handover_check is not None and any(c["name"].startswith(HANDOVER_CHECK) for c in design.checks):
-        design.checks = _verified_handover(design, *handover_check(design), settings.check_tolerance)
+
+
+def _judge(design: Design, best: Outcome, drive, terms: tuple) -> None:
+    """The design's status and notes from its checks: limits exceeded (not enforced, between nodes, or by the
+    full simulation), the objective as the fine grid reads it, the rate note of a free cycle time."""
+    settings, problem = design.settings, design.problem
     failed = [c for c in design.checks if not c["ok"] and "design_term" not in c]
     held = enforced_checks(settings, drive is not None and drive.stepper)
     relaxed = [c for c in failed if c["name"] in ENFORCED_CHECKS - held]
@@ -163,8 +178,8 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
             + ": tighten [design] accuracy_mm or lower the stitch rate")
     if drive is not None:
         # the objective as the fine grid reads it (the NLP saw the nodes)
-        design.objective_value = _fine_objective(design, best) if objective in TORQUE_OBJECTIVES else best.value
-    if free_time(objective):
+        design.objective_value = _fine_objective(design, best) if design.objective in TORQUE_OBJECTIVES else best.value
+    if free_time(design.objective):
         design.notes.insert(0, _rate_note(design, best))
     if drive is not None and not best.handover_values():
         why = ("the problem has no [servo] section (servo loop and belt model)" if not terms
@@ -175,7 +190,6 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
                             f"{100 * best.fine['worst_relative_violation']:.2f} % (more than check_tolerance "
                             f"{100 * settings.check_tolerance:g} %) after {settings.refinements} refinements: "
                             f"use more mesh intervals")
-    return design
 
 
 def _rate_note(design: Design, best: Outcome) -> str:

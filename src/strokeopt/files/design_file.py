@@ -1,10 +1,10 @@
 """Design files: ``design.json``, ``cam_table.csv`` and ``cam_table.txt`` of a :class:`~strokeopt.design.result.Design`.
 
-``design.json`` (written by :func:`write_design`, which :meth:`Design.write` calls, read by
-:func:`read_design` and by ``strokeopt verify``)::
+``design.json`` (written by :func:`write_design`, read by :func:`read_design` and :func:`load_design`,
+and by ``strokeopt verify``, ``report --design`` and ``compare``)::
 
     {
-      "format": "strokeopt-design", "version": 1,
+      "format": "strokeopt-design", "schema_version": 2,
       "problem_file": "<absolute path>", "problem": "<name>",
       "spm": 600.0, "cycle_time_s": ..., "objective": "min_peak_torque",
       "objective_value": ..., "objective_unit": "N m",
@@ -143,13 +143,36 @@ def cam_table_header(design, spec: CamTableSpec) -> list[str]:
             f"motor: {design.motor or '(none)'}; pulley: {pulley}"]
 
 
+#: The version of the design.json schema this strokeopt writes. 1: the first (its files carry ``"version": 1``
+#: and no ``schema_version``; read as they are); 2: ``schema_version`` and the verdict of the verified
+#: pipeline (``verdict``, ``not_judged``). A file of a newer schema is refused (upgrade strokeopt).
+SCHEMA_VERSION = 2
+
+
+def schema_version(data: dict, file: str) -> int:
+    """The schema version of the design data ``data`` read from ``file``, refused when it is not one this
+    strokeopt reads."""
+    version = data.get("schema_version", 1 if data.get("version") == 1 else None)
+    if version is None:
+        raise ProblemError(file, "schema_version", "is missing (and no \"version\": 1 of the first schema): is this "
+                                                   "a design.json written by 'strokeopt solve --out DIR'?")
+    if isinstance(version, bool) or not isinstance(version, int) or version < 1:
+        raise ProblemError(file, "schema_version", f"must be a positive whole number, got {version!r}: is this a "
+                                                   "design.json written by 'strokeopt solve --out DIR'?")
+    if version > SCHEMA_VERSION:
+        raise ProblemError(file, "schema_version", f"{version}: written by a newer strokeopt; this one reads design "
+                                                   f"files up to schema {SCHEMA_VERSION} (pip install -U strokeopt, "
+                                                   "or solve the problem again with this version)")
+    return version
+
+
 def design_json(design, resolution_deg: float = 0.1, spec: CamTableSpec | None = None,
                 extra: dict | None = None) -> dict:
     """The data of ``design.json`` (see the module docstring); ``extra``: more fields of the solve's report
     (its ``comparison`` with the classic laws and the ``drive`` it used), stored as they are."""
     spec = spec or CamTableSpec(resolution_deg)
     sch = design.problem.timing.schedule(design.spm)
-    out = {"format": "strokeopt-design", "version": 1, **design.summary(), **(extra or {})}
+    out = {"format": "strokeopt-design", "schema_version": SCHEMA_VERSION, **design.summary(), **(extra or {})}
     out["moves"] = [{**m.to_dict(), "unit_solution": {"S": m.solution.S.tolist(), "V": m.solution.V.tolist(),
                                                       "A": m.solution.A.tolist()}} for m in design.moves]
     out["intervals"] = [{"index": itv.index, "name": itv.name, "kind": "move" if itv.is_move else "dwell",
@@ -303,6 +326,7 @@ def read_design(path: str | Path) -> tuple[dict, StrokeFunction]:
         raise ProblemError(str(path), "", f"is not a readable design file: {exc}") from None
     if not isinstance(data, dict) or data.get("format") != "strokeopt-design":
         raise ProblemError(str(path), "format", "is not a strokeopt design file (format != 'strokeopt-design')")
+    schema_version(data, str(path))
     validate_design(data, str(path))
     try:
         mesh = Mesh(int(data["mesh"]["intervals"]), int(data["mesh"]["degree"]))

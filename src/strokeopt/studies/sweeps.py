@@ -10,7 +10,6 @@ from __future__ import annotations
 import time
 from dataclasses import replace
 
-from ..design.collocation import Mesh
 from ..design.nlp import clear_cache
 from ..design.settings import DesignSettings
 from ..design.solve import solve_design
@@ -69,8 +68,7 @@ STUDY_MESHES = ((10, 2), (20, 2), (40, 2), (10, 3), (20, 3), (40, 3), (80, 3), (
 
 
 def mesh_study(problem, *, objective: str | None = None, spm: float | None = None,
-               settings: DesignSettings | None = None, meshes=STUDY_MESHES, progress=None,
-               error_terms=None) -> list[dict]:
+               settings: DesignSettings | None = None, meshes=STUDY_MESHES, progress=None) -> list[dict]:
     """What accuracy costs in time: the same design on each mesh against the last (finest) one.
 
     The parts are held fixed (the file's motor and pulley) so the study sees the discretisation
@@ -85,8 +83,8 @@ def mesh_study(problem, *, objective: str | None = None, spm: float | None = Non
     for n, d in it:
         clear_cache()  # every mesh is timed with its build
         t0 = time.perf_counter()
-        design = solve_design(problem, objective=objective, spm=spm, settings=settings, mesh=Mesh(n, d),
-                              error_terms=error_terms)
+        design = solve_design(problem, objective=objective, spm=spm,
+                              settings=replace(settings, mesh_intervals=n, collocation_degree=d))
         elapsed = time.perf_counter() - t0
         nodes = n * (d + 1) + 2 * (n + 1)
         rows.append({"intervals": n, "degree": d, "variables": nodes * len(design.moves),

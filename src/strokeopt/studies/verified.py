@@ -83,7 +83,7 @@ FAILED_STATES = ("limits exceeded", "verification failed")
 
 
 def solve_verified(problem, *, objective: str | None = None, spm: float | None = None, settings=None,
-                   mesh=None, warm_start=None, compare: bool = True, scenes=None, options=None,
+                   warm_start=None, compare: bool = True, scenes=None, options=None,
                    progress=None, verbose: bool = False) -> VerifiedDesign:
     """Solve the design problem of ``problem`` and judge the design: the one pipeline.
 
@@ -91,7 +91,7 @@ def solve_verified(problem, *, objective: str | None = None, spm: float | None =
     error term beside it as ``design_term``); the design is re-simulated in its contact scene
     (``[design.contact] scene``, else ``release``, else the first) and in ``scenes`` (more scene names);
     ``compare``: the classic laws on the same drive beside it. ``objective``, ``spm``, ``settings``,
-    ``mesh``, ``warm_start``, ``progress`` (wraps the motors of a catalogue search) and ``verbose`` are
+    ``warm_start``, ``progress`` (wraps the motors of a catalogue search) and ``verbose`` are
     :func:`~strokeopt.design.solve.solve_design`'s. Raises :class:`~strokeopt.errors.SolverError` when no
     design exists (naming the constraint).
     """
@@ -104,7 +104,7 @@ def solve_verified(problem, *, objective: str | None = None, spm: float | None =
         return held["accuracy"].handover_error, "full servo simulation"
 
     checked = getattr(problem, "servo", None) is not None and getattr(problem, "drive", None) is not None
-    design = solve_design(problem, objective=objective, spm=spm, settings=settings, mesh=mesh,
+    design = solve_design(problem, objective=objective, spm=spm, settings=settings,
                           warm_start=warm_start, verbose=verbose, progress=progress,
                           handover_check=full_simulation if checked else None)
     return verify_design(design, accuracy=held.get("accuracy"), compare=compare, scenes=scenes, options=options)
