@@ -117,14 +117,37 @@ class Closure:
             out.append(self.total_derivative(out[-1]))
         return out
 
+    def link_frame(self, pts: dict, p, link):
+        """The pose of ``link``: a function placing a reference point [m] where the link has carried it,
+        and the link's angle from its reference orientation (first two joints of its data)."""
+        a, b = link.joints[0], link.joints[1]
+        e0 = self.ref(p, b) - self.ref(p, a)
+        e = pts[b] - pts[a]
+
+        def place(point_ref):
+            d0 = point_ref - self.ref(p, a)
+            alpha = ca.dot(d0, e0) / ca.dot(e0, e0)
+            beta = cross(e0, d0) / ca.dot(e0, e0)
+            return pts[a] + alpha * e + beta * perp(e)
+
+        return place, relative_angle(e0, e)
+
+    def taylor(self, expr):
+        """``expr`` on the cubic Taylor polynomial of the pose, q(theta + s) = q + dq s + d2q s^2/2 +
+        d3q s^3/6; returns (s, [dq, d2q, d3q] symbols, the expression in s). Its derivatives in s at 0
+        are the total derivatives of expr up to the third."""
+        if not hasattr(self, "_taylor"):
+            s = ca.SX.sym("s")
+            dqs = [ca.SX.sym(f"d{k}q", self.q.shape[0]) for k in range(1, 4)]
+            self._taylor = (s, dqs, self.q + dqs[0] * s + dqs[1] * s ** 2 / 2 + dqs[2] * s ** 3 / 6)
+        s, dqs, qs = self._taylor
+        return s, dqs, ca.substitute(expr, ca.vertcat(self.q, self.theta), ca.vertcat(qs, self.theta + s))
+
     def jet_function(self, name: str, expr, order: int = 3) -> ca.Function:
         """``expr(q, theta, p)`` and its first ``order`` derivatives along the cycle, from the pose's
         derivatives: expr is evaluated on the Taylor polynomial of q(theta + s) (exact to ``order``)
         and differentiated in s at 0 by AD. Inputs q, dq, d2q, d3q, theta, p."""
-        s = ca.SX.sym("s")
-        dqs = [ca.SX.sym(f"d{k}q", self.q.shape[0]) for k in range(1, 4)]
-        qs = self.q + dqs[0] * s + dqs[1] * s ** 2 / 2 + dqs[2] * s ** 3 / 6
-        e = ca.substitute(expr, ca.vertcat(self.q, self.theta), ca.vertcat(qs, self.theta + s))
+        s, dqs, e = self.taylor(expr)
         outs = [e]
         for _ in range(order):
             outs.append(ca.jacobian(outs[-1], s))
@@ -167,12 +190,18 @@ class Closure:
                            ["q", "theta", "p"], ["dq", "d2q", "d3q"])
 
     def group_indices(self, q, theta, p) -> list:
-        """Per group (placements excluded): |det| of its normalised closure block, 1 at best, 0 at a toggle."""
+        """Per group (placements excluded) the transmission index: the Hadamard ratio of its closure block,
+        |det B| / prod |row_i of B|, 1 when the rows are orthogonal, 0 at a toggle (dead centre). For a dyad
+        the rows are unit vectors along its two links, and the index is the sine of Alt's transmission angle."""
         phi_q = ca.jacobian(self.residual(q, theta, p), q)
         out = []
         for g in self.structure.groups:
             if g.kind != "placement":
-                out.append(ca.fabs(ca.det(phi_q[list(g.rows), list(g.cols)])))
+                block = phi_q[list(g.rows), list(g.cols)]
+                scale = 1
+                for i in range(block.shape[0]):
+                    scale = scale * ca.norm_2(block[i, :])
+                out.append(ca.fabs(ca.det(block)) / scale)
         return out
 
     def _make_quality(self) -> ca.Function:

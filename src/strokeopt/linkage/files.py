@@ -130,6 +130,14 @@ def _read_link(lf: Fields, names: list[str], joints: list[Joint], fields: dict) 
     js = tuple(_joint_names(lf, "joints", names))
     mass = lf.number("mass_kg", 0.0, min=0, max=1e4)              # 0: massless (kinetostatics of the rest)
     cg = lf.raw("cg_mm", None)
+    line = lf.raw("cg_on_line", None)
+    if line is not None:   # the centre of gravity at a distance from the first joint towards the second
+        a, b = (next(j for j in joints if j.name == n) for n in _joint_names(lf, "cg_on_line", names))
+        dist = lf.number("cg_distance_mm", min=0, max=1e5) / 1e3
+        if cg is not None:
+            raise lf.error("cg_on_line", "give the centre of gravity once (cg_mm or cg_on_line)")
+        span = math.dist((a.x, a.y), (b.x, b.y))
+        cg = [(a.x + dist * (b.x - a.x) / span) * 1e3, (a.y + dist * (b.y - a.y) / span) * 1e3]
     if cg is not None:
         if not (isinstance(cg, list) and len(cg) == 2 and all(isinstance(c, (int, float)) for c in cg)):
             raise lf.error("cg_mm", "must be [x, y] in mm (at the reference pose)")

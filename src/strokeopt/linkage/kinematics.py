@@ -69,6 +69,21 @@ class Kinematics:
     def q_reference(self) -> np.ndarray:
         return np.concatenate([self.linkage.joint(n).xy for n in self.structure.unknown])
 
+    def with_geometry(self, coords) -> "Kinematics":
+        """The same topology (and compiled Functions) for other reference coordinates (flat, metres)."""
+        other = Kinematics.__new__(Kinematics)
+        other.__dict__.update(self.__dict__)
+        other.linkage = self.linkage.with_reference(coords)
+        return other
+
+    def screen(self, n: int = 360) -> np.ndarray | None:
+        """The poses at n angles by the fast walk only (no refusal): None where it fails or does not return."""
+        grid = self.linkage.crank.reference_angle + 2 * math.pi * np.arange(n + 1) / n
+        q = self._fast_walk(grid)
+        if q is None or np.linalg.norm(q[-1] - q[0]) > RETURN_TOL:
+            return None
+        return q[:-1]
+
     # -- the walk ----------------------------------------------------------------------------------
     def solve(self, n: int = 720) -> Cycle:
         theta0 = self.linkage.crank.reference_angle

@@ -1,0 +1,161 @@
+"""The ``[synthesis]`` section of a linkage file (targets, what is fixed, bounds) and the fit of a solved
+linkage against it, computed by the exact analysis (kinematics.py), never by the NLP's own nodes."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..io.fields import Fields
+from .kinematics import Cycle, Kinematics
+
+NODE_STEP_DEG = 10.0   # synthesis nodes: every 10 deg of the input, plus the table's angles
+
+
+@dataclass
+class SynthesisSpec:
+    output: str                     # the output whose speed is tabulated
+    angles: list                    # input angles of the table [rad]
+    speeds: np.ndarray              # [m/s] (or rad/s for an angle output)
+    rms_max: float
+    fixed_joints: list
+    fixed_lengths: list             # [((a, b), length m)]
+    fixed_angles: list              # [((a, b), (c, d), angle rad)]
+    length_min: float
+    length_max: float
+    box: float
+    index_min: float
+    starts: int
+    screen: int
+    seed: int
+    swing_output: str | None = None
+    swing: float | None = None      # [rad] of swing_output
+    swing_tol: float = 0.0
+    minimum_at: float = 0.0         # input angle of swing_output's minimum [rad]
+    minimum_tol: float = 0.0
+    defect_tol: float = 2e-3        # m, trapezoidal tie between nodes (a branch change breaks it by far more)
+
+    def nodes(self, theta0: float) -> list:
+        """Node angles: every NODE_STEP_DEG from the reference, plus the table's angles (reference first)."""
+        offs = set(np.round(np.arange(0, 360, NODE_STEP_DEG), 9))
+        offs |= {round(math.degrees(t - theta0) % 360, 9) for t in self.angles}
+        return [theta0 + math.radians(o) for o in sorted(offs)]
+
+    def target_thetas(self, theta0: float) -> list:
+        nodes = self.nodes(theta0)
+        out = []
+        for t in self.angles:
+            o = math.radians(round(math.degrees(t - theta0) % 360, 9))
+            out.append(min(nodes, key=lambda n: abs(n - theta0 - o)))
+        return out
+
+    def lengths_ok(self, linkage) -> bool:
+        for link in linkage.links:
+            for i, a in enumerate(link.joints):
+                for b in link.joints[i + 1:]:
+                    if not self.length_min <= linkage.length(a, b) <= self.length_max:
+                        return False
+        return True
+
+    def screen_score(self, kin: Kinematics, q: np.ndarray, problem) -> float | None:
+        """Fit of a screened geometry (poses at 1 deg): RMS speed error, weighted by the swing's miss."""
+        n = len(q)
+        grid = kin.linkage.crank.reference_angle + 2 * math.pi * np.arange(n) / n
+        p = np.repeat(kin.p[:, None], n, 1)
+        dq = np.asarray(kin._map("derivatives", n)(q.T, grid[None, :], p)[0]).T
+        idx = np.asarray(kin._map("quality", n)(q.T, grid[None, :], p))
+        worst = idx.min() if idx.size else 1.0
+        if worst < 1e-3:
+            return None
+        short = max(0.0, self.index_min - worst) / max(self.index_min, 1e-9)   # below the limit: IPOPT may mend it
+        stub = _Stub(kin, grid, q, dq)
+        y = kin.output(stub, self.output)
+        at = [int(round(((t - grid[0]) % (2 * math.pi)) / (2 * math.pi / n))) % n for t in self.angles]
+        rms = math.sqrt(np.mean((y[1, at] * problem.omega - self.speeds) ** 2))
+        if self.swing_output is None:
+            return rms * (1 + short)
+        ys = kin.output(stub, self.swing_output)[0]
+        swing = ys.max() - ys.min()
+        return rms * (1 + abs(swing - self.swing) / self.swing) * (1 + short)
+
+
+def _Stub(kin, grid, q, dq) -> Cycle:
+    zero = np.zeros_like(q)
+    return Cycle(kin.linkage, kin.structure, grid, q, dq, zero, zero, np.zeros(len(q)), np.zeros((len(q), 0)), 0.0,
+                 len(q))
+
+
+def _pairs(f: Fields, key: str, names) -> list:
+    out = []
+    for k, item in enumerate(f.raw(key, [])):
+        where = f"{key}[{k + 1}]"
+        if not isinstance(item, dict):
+            raise f.error(where, "must be an inline table")
+        out.append(item)
+        for line in item.get("joints", []) + [j for ln in item.get("lines", []) for j in ln]:
+            if line not in names:
+                raise f.error(where, f"names the unknown joint {line!r}")
+    return out
+
+
+def read_spec(problem, f: Fields) -> SynthesisSpec:
+    """Read and check ``[synthesis]`` (every field with its range)."""
+    names = [j.name for j in problem.linkage.joints]
+    outputs = [o.name for o in problem.linkage.outputs]
+    output = f.string("output", choices=tuple(outputs))
+    angles = f.raw("angles_deg")
+    speeds = f.raw("speeds_m_s")
+    if not (isinstance(angles, list) and isinstance(speeds, list) and len(angles) == len(speeds) >= 3
+            and all(isinstance(v, (int, float)) for v in angles + speeds)):
+        raise f.error("speeds_m_s", "angles_deg and speeds_m_s must be arrays of numbers of one length (3 or more)")
+    rms_max = f.number("rms_max_m_s", min=0, max=10)
+    fixed_joints = f.raw("fixed_joints", [])
+    for n in fixed_joints:
+        if n not in names:
+            raise f.error("fixed_joints", f"names the unknown joint {n!r}")
+    lengths = [((d["joints"][0], d["joints"][1]), d["length_mm"] / 1e3) for d in _pairs(f, "fixed_lengths", names)]
+    angles_fixed = [(tuple(d["lines"][0]), tuple(d["lines"][1]), math.radians(d["angle_deg"]))
+                    for d in _pairs(f, "fixed_angles", names)]
+    spec = SynthesisSpec(
+        output, [math.radians(a) for a in angles], np.array(speeds, dtype=float), rms_max, list(fixed_joints),
+        lengths, angles_fixed,
+        f.number("length_min_mm", min=0.1, max=1e4) / 1e3, f.number("length_max_mm", min=0.1, max=1e4) / 1e3,
+        f.number("coordinate_box_mm", min=1, max=1e4) / 1e3, problem.min_transmission_index,
+        f.number("starts", 8, min=1, max=200, integer=True), f.number("screen", 1500, min=10, max=100000, integer=True),
+        f.number("seed", 1, min=0, max=2 ** 31, integer=True))
+    if f.has("swing_deg"):
+        spec.swing_output = f.string("swing_output", choices=tuple(outputs))
+        spec.swing = math.radians(f.number("swing_deg", min=0.1, max=180))
+        spec.swing_tol = math.radians(f.number("swing_tolerance_deg", min=0, max=45))
+        spec.minimum_at = math.radians(f.number("minimum_at_deg", min=-360, max=720))
+        spec.minimum_tol = math.radians(f.number("minimum_tolerance_deg", min=0, max=180))
+    f.finish()
+    return spec
+
+
+def fit_report(kin: Kinematics, cycle: Cycle, spec: SynthesisSpec, problem) -> dict:
+    """The fit of a solved linkage by the exact analysis: each target's error, RMS, swing, extremes."""
+    n = len(cycle.theta)
+    step = kin.closure.function("step")
+    deriv = kin.closure.function("derivatives")
+    fn = kin.output_function(spec.output)
+    rows = []
+    for t, v in zip(spec.angles, spec.speeds):
+        k = int(round(((t - cycle.theta[0]) % (2 * math.pi)) / (2 * math.pi / n))) % n
+        theta = cycle.theta[0] + (t - cycle.theta[0]) % (2 * math.pi)
+        q = np.asarray(step(cycle.q[k], cycle.theta[k], theta, kin.p)[0]).ravel()
+        d = [np.asarray(x).ravel() for x in deriv(q, theta, kin.p)]
+        model = float(fn(q, *d, theta, kin.p)[1]) * problem.omega
+        rows.append({"angle_deg": round(math.degrees(t) % 360, 6), "target": float(v), "model": model,
+                     "error": model - float(v)})
+    rms = math.sqrt(np.mean([r["error"] ** 2 for r in rows]))
+    out = {"rms_m_s": rms, "targets": rows, "max_error_m_s": max(abs(r["error"]) for r in rows),
+           "min_transmission_index": float(cycle.index.min()) if cycle.index.size else 1.0}
+    if spec.swing_output is not None:
+        y = kin.output(cycle, spec.swing_output)[0]
+        out["swing_deg"] = math.degrees(y.max() - y.min())
+        out["minimum_at_deg"] = math.degrees(cycle.theta[int(np.argmin(y))]) % 360
+        out["maximum_at_deg"] = math.degrees(cycle.theta[int(np.argmax(y))]) % 360
+    return out
