@@ -128,7 +128,9 @@ def step_angle(problem) -> float | None:
     drive = getattr(problem, "drive", None)
     if drive is None or drive.motor is None:
         return None
-    return getattr(drive.catalogue().actuator(drive.motor, (str(problem.file), "drive.motor")), "step_angle", None)
+    from ..drive.selection import resolve_drive
+
+    return getattr(resolve_drive(problem).actuator, "step_angle", None)
 
 
 def _load(args, fix_in_design: bool = False):

@@ -157,15 +157,9 @@ class DriveSetup:
                            [m.peak_torque for m in self.catalogue.motors.values()] or [1.0])
 
     def pulley(self, teeth: int):
-        found = self.catalogue.pulleys_of(self.profile, teeth, teeth)
-        if not found:
-            from ..drive.catalogue import Pulley
-            from ..drive.transmission import pitch_diameter
+        from ..drive.selection import catalogue_pulley
 
-            pd = pitch_diameter(self.profile, teeth)
-            return Pulley(f"{self.profile}-{teeth}", self.profile, teeth, pd,
-                          float(self.catalogue.pulley_inertia(self.profile, pd)), "model")
-        return found[0]
+        return catalogue_pulley(self.catalogue, self.profile, teeth)
 
     def pulley_inertia(self, pitch_diameter):
         if not self.settings.include_pulley_inertia:

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from .collocation import Mesh, MoveSolution, move_piece
+from ..drive.selection import resolve_drive
 from ..motion.stroke import StrokeFunction, dwell_piece
 
 
@@ -84,7 +85,9 @@ class Design:
     pitch_diameter: float | None = None
     motor: str | None = None
     notes: list[str] = field(default_factory=list)
-    motor_spec: Any = field(default=None, repr=False)  # the ServoMotor
+    #: the resolved drive (drive/selection.py): motor, transmission with its pulley, belt, limits -- the
+    #: catalogue entries the design was solved with, handed on (nothing looks them up by name again)
+    drive: Any = field(default=None, repr=False)
     settings: Any = field(default=None, repr=False)  # the DesignSettings it was solved with
     #: the handover accuracy was held in its solve (a min_time warm-started from it holds it from the start)
     accuracy_enforced: bool = field(default=False, repr=False)
@@ -92,6 +95,11 @@ class Design:
     verification: dict | None = None
     #: the free model parameters found ([design.free], design/free.py): one row each
     free_parameters: list = field(default_factory=list)
+
+    @property
+    def motor_spec(self):
+        """The design's motor or stepper (the catalogue entry of the resolved drive), None without a drive."""
+        return None if self.drive is None else self.drive.actuator
 
     @property
     def solutions(self) -> list[MoveSolution]:
@@ -185,7 +193,9 @@ def design_from_data(problem, data: dict, stroke: StrokeFunction) -> Design:
                     fine_grid=dict(data.get("fine_grid", {})), pulley_teeth=data.get("pulley_teeth"),
                     pitch_diameter=None if pd is None else pd * 1e-3, motor=data.get("motor"),
                     notes=list(data.get("notes", [])))
-    if design.motor is not None and getattr(problem, "drive", None) is not None:
-        design.motor_spec = problem.drive.catalogue().actuator(design.motor, (str(problem.file), "drive.motor"))
     design.settings = getattr(problem, "design", None)
+    if design.motor is not None and getattr(problem, "drive", None) is not None:  # the file's names, resolved once
+        design.drive = resolve_drive(problem, motor=design.motor, pulley_teeth=design.pulley_teeth,
+                                     pitch_diameter=design.pitch_diameter, include_pulley_inertia=getattr(
+                                         design.settings, "include_pulley_inertia", True))
     return design

@@ -48,6 +48,7 @@ from .request import DriveChoice, DriveSetup, SolveRequest
 from .result import Design, stroke_from_solutions
 from .settings import DesignSettings
 from .solver import solver_options as _solver_options
+from ..drive.selection import resolve_drive
 from ..errors import ProblemError, SolverError
 from ..io.plain import format_value
 
@@ -92,8 +93,10 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     design = Design(problem, spm, req.objective, best.value, nlp.graph.unit, stroke, moves, nlp.request.mesh,
                     best.status, wall, best.iterations, fine_grid=best.fine, pulley_teeth=teeth, pitch_diameter=pd,
                     motor=None if motor is None else motor.name, notes=notes)
-    design.motor_spec = motor
     design.settings = settings
+    if drive is not None:  # the parts chosen, resolved once and handed on with the design
+        design.drive = resolve_drive(problem, motor=motor, pulley_teeth=teeth, pitch_diameter=pd,
+                                     include_pulley_inertia=settings.include_pulley_inertia)
     design.accuracy_enforced = bool(nlp.request.enforce_accuracy and terms)
     design.free_parameters = free
     _settings_notes(design, settings, nlp, drive)

@@ -11,18 +11,13 @@ import numpy as np
 
 from .request import DriveSetup
 from .settings import DesignSettings
-from ..drive.transmission import BeltPulley
 
 
 def design_drive(design):
     """The drive setup of the design's problem and the transmission of the design's pulley (the problem's own
     transmission when it is not a belt pulley)."""
     drive = DriveSetup(design.problem, getattr(design.problem, "design", None) or DesignSettings())
-    if drive.own_transmission is not None:
-        return drive, drive.own_transmission
-    trans = drive.transmission(design.pulley_teeth) if design.pulley_teeth else \
-        BeltPulley(design.pitch_diameter, inertia=float(drive.pulley_inertia(design.pitch_diameter)))
-    return drive, trans
+    return drive, design.drive.transmission
 
 
 def design_torque(design, samples: int = 3601, t=None):

@@ -225,13 +225,14 @@ def handover_accuracy(problem, stroke=None, spm: float | None = None, *, setting
 
 
 def stroke_accuracy(problem, stroke, spm: float, *, motor=None, pulley_teeth: int | None = None,
-                    radius: float | None = None, label: str = "") -> AccuracyResult:
+                    radius: float | None = None, label: str = "", resolved=None) -> AccuracyResult:
     """The full servo simulation of ``stroke`` at ``spm`` on a motor and pulley (default: the
     problem's; a :class:`~strokeopt.drive.catalogue.ServoMotor`, a tooth count, or a continuous
     ``radius``): the handover error ``strokeopt accuracy --design`` prints, and the number the
     command line's solve reports in its check table (the design package does not import servo)."""
     settings = settings_of(problem)
-    axis = axis_from_problem(problem, settings, motor=motor, pulley_teeth=pulley_teeth, radius=radius)
+    axis = axis_from_problem(problem, settings, motor=motor, pulley_teeth=pulley_teeth, radius=radius,
+                             resolved=resolved)
     return handover_accuracy(problem, stroke, spm=spm, settings=settings, axis=axis,
                              gains=tuned_gains(axis, settings), label=label)
 
@@ -241,9 +242,7 @@ def design_accuracy(design) -> AccuracyResult:
     rate on its own problem (with the values of free model parameters it found), motor and pulley (or
     continuous radius) -- the number the solve's check table, the design report and ``strokeopt accuracy
     --design`` print."""
-    radius = None if design.pulley_teeth is not None else design.radius
-    return stroke_accuracy(design.problem, design.stroke, design.spm, motor=design.motor_spec,
-                           pulley_teeth=design.pulley_teeth, radius=radius)
+    return stroke_accuracy(design.problem, design.stroke, design.spm, resolved=design.drive)
 
 
 def residual_vibration_table(problem, spm: float | None = None, strokes=(), *,

@@ -101,21 +101,26 @@ def belt_stiffness(specific_stiffness: float, width: float, span: float, carrier
 
 
 def axis_from_problem(problem, settings: ServoSettings | None = None, *, motor=None, pulley_teeth: int | None = None,
-                      radius: float | None = None) -> DriveAxis:
+                      radius: float | None = None, resolved=None) -> DriveAxis:
     """The :class:`DriveAxis` of a problem: motor, pulley, belt and load from its ``[drive]``
-    and the catalogue, belt geometry and stiffness from ``[servo]``."""
+    and the catalogue, belt geometry and stiffness from ``[servo]``. ``resolved``: a design's
+    :class:`~strokeopt.drive.selection.ResolvedDrive`, whose motor and pulley are taken as they are."""
     settings = settings_of(problem, settings)
     drive = getattr(problem, "drive", None)
     file = str(problem.file)
     if drive is None:
         raise ProblemError(file, "drive", "the servo model needs the [drive] section (motor, moving_mass_kg)")
-    catalogue = drive.catalogue()
+    catalogue = drive.catalogue() if resolved is None else resolved.catalogue
+    if resolved is not None and resolved.radius is not None:
+        motor, radius, j_pulley = resolved.actuator, resolved.radius, resolved.pulley_inertia
     if motor is None:
         if drive.motor is None:
             raise ProblemError(file, "drive.motor", "name the motor of the axis (a catalogue name)")
         motor = catalogue.motor(drive.motor, (file, "drive.motor"))
     teeth = pulley_teeth if pulley_teeth is not None else problem.pulley_teeth
-    if radius is None:
+    if resolved is not None and resolved.radius is not None:
+        pass  # the design's pulley (catalogue or continuous), resolved once
+    elif radius is None:
         pulley = next((p for p in catalogue.pulleys_of(drive.profile) if p.teeth == teeth), None)
         if pulley is None:
             raise ProblemError(file, "transmission.pulley_teeth", f"no {drive.profile} pulley with {teeth} teeth "
