@@ -36,3 +36,14 @@ class SolverError(StrokeoptError, RuntimeError):
         self.reason = reason
         self.partial = partial
         super().__init__(reason)
+
+
+class LimitError(SolverError):
+    """A design that cannot meet a limit: ``reason`` names it and by how much (one line per limit);
+    ``excess`` is the worst limit's relative excess (0.1: 10 % over) and ``short`` its one-line form --
+    what a catalogue search ranks and names its motors by."""
+
+    def __init__(self, reason: str, excess: float, short: str, partial=None):
+        super().__init__(reason, partial)
+        self.excess = float(excess)
+        self.short = short

@@ -16,7 +16,7 @@ from .limits import LimitGroup
 from .nlp import prepare
 from .request import SolveRequest
 from .solver import STATUS_OK, solve_nlp
-from ..errors import SolverError
+from ..errors import LimitError, SolverError
 
 
 def diagnose(req: SolveRequest, status: str) -> SolverError:
@@ -60,10 +60,8 @@ def diagnose(req: SolveRequest, status: str) -> SolverError:
             seen.add(other.name)
             where_ = f" (move {other.move})" if other.move is not None else ""
             lines.append(f"  also{where_}: {need_text(other, other_need, other.what)}")
-    err = SolverError("\n".join(lines))
-    err.excess = excess  # relative excess of the worst limit: ranks the motors of a catalogue search
-    err.short = need_text(lim, need, lim.short)
-    return err
+    # the relative excess of the worst limit ranks the motors of a catalogue search
+    return LimitError("\n".join(lines), excess, need_text(lim, need, lim.short))
 
 
 def need_text(lim: LimitGroup, need: float, name: str) -> str:

@@ -14,7 +14,7 @@ from dataclasses import replace
 from .refine import Outcome, solve_one
 from .objectives import needs_terms
 from .request import DriveChoice, SolveRequest
-from ..errors import ProblemError, SolverError
+from ..errors import LimitError, ProblemError, SolverError
 
 
 def choose_parts(req: SolveRequest, progress=None):
@@ -83,11 +83,10 @@ def choose_parts(req: SolveRequest, progress=None):
         if len(failures) == 1:
             raise failures[0][1]
         # the motor that comes closest first; one line per motor after it
-        failures.sort(key=lambda f: getattr(f[1], "excess", math.inf))
+        failures.sort(key=lambda f: f[1].excess if isinstance(f[1], LimitError) else math.inf)
         m0, e0 = failures[0]
-        lines = [f"no motor of the catalogue can drive this design at {spm:g} spm; closest {m0.name}: "
-                 f"{getattr(e0, 'short', e0.reason.splitlines()[0])}"]
-        lines += [f"  {m.name}: {getattr(e, 'short', e.reason.splitlines()[0])}" for m, e in failures]
+        lines = [f"no motor of the catalogue can drive this design at {spm:g} spm; closest {m0.name}: {_short(e0)}"]
+        lines += [f"  {m.name}: {_short(e)}" for m, e in failures]
         raise SolverError("\n".join(lines))
     best, teeth = min(results, key=lambda r: r[0].value)
     if len(motors) > 1:
@@ -123,3 +122,8 @@ def nearest_teeth(req: SolveRequest, motor, cont: Outcome):
         raise failures[0]
     best[0].continuous_radius = cont.radius
     return best
+
+
+def _short(err: SolverError) -> str:
+    """A failed solve in one line: the worst limit and by how much (a :class:`LimitError`), else its first line."""
+    return err.short if isinstance(err, LimitError) else err.reason.splitlines()[0]

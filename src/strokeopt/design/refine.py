@@ -29,7 +29,7 @@ from .objectives import TIME_SCALE, free_time, needs_terms
 from .pins import pin_intervals, pin_times, pins_fit
 from .request import SolveRequest
 from .solver import STATUS_OK, solve_nlp
-from ..errors import SolverError
+from ..errors import LimitError, SolverError
 
 #: Re-solves that move the pinned points at most, per mesh.
 PIN_ITERATIONS = 5
@@ -218,9 +218,8 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
                 motor = f" for motor {choice.motor.name}" if choice is not None and choice.motor is not None else ""
                 short = (f"handover accuracy needs {error * 1e3:.4g} mm (the most accurate stroke), limit "
                          f"{settings.accuracy * 1e3:.4g} mm ({100 * (error / settings.accuracy - 1):.1f} % over)")
-                err = SolverError(f"the design cannot meet the limits{motor} at {nlp.request.spm:g} spm: {short}")
-                err.excess, err.short = error / settings.accuracy - 1, short  # as diagnose's: ranks the motors
-                raise err
+                raise LimitError(f"the design cannot meet the limits{motor} at {nlp.request.spm:g} spm: {short}",
+                                 error / settings.accuracy - 1, short)
             if not violated and pins_in_place(nlp, x, new):
                 break
             held = (nlp, sol, x, sols, status) if not violated else None
