@@ -51,7 +51,7 @@ def test_blind_stitch_is_two_dyads_in_series():
     s = kinematics_of(load_linkage_file(BLIND).linkage).structure
     assert [g.kind for g in s.groups if g.kind != "placement"] == ["dyad", "dyad"]
     loops = s.four_bars
-    assert len(loops) == 2 and loops[0].kind.startswith("crank-rocker (crank")
+    assert len(loops) == 2 and loops[0].kind.startswith("crank-rocker class (crank,")
 
 
 def _without_joint(text: str, joint: str) -> str:

@@ -272,6 +272,9 @@ def build_parser() -> argparse.ArgumentParser:
     _plot_option(p, "tradeoff_<strokes>_<law>_<motor>")
     p.set_defaults(run=cmd_tradeoff)
     _report_parsers(sub, problem)
+    from .linkage_command import add_linkage_parser
+
+    add_linkage_parser(sub, problem)
     return parser
 
 

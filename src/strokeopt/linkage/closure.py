@@ -184,6 +184,11 @@ class Closure:
                            [q, ca.mmax(ca.fabs(phi)), ca.norm_2(q - pred), move],
                            ["q0", "theta0", "theta1", "p"], ["q", "residual", "correction", "move"])
 
+    def _make_positions(self) -> ca.Function:
+        pts = self.points(self.q, self.theta, self.p)
+        flat = ca.vertcat(*[pts[j.name] for j in self.linkage.joints if j.name in pts])
+        return ca.Function("positions", [self.q, self.theta, self.p], [flat], ["q", "theta", "p"], ["xy"])
+
     def _make_derivatives(self) -> ca.Function:
         q1, q2, q3 = self.derivatives(self.q)[1:]
         return ca.Function("pose_derivatives", [self.q, self.theta, self.p], [q1, q2, q3],

@@ -225,7 +225,7 @@ def _classify(linkage: Linkage, cycle, joints) -> FourBar:
     elif (s - ref) % 4 == 2:
         kind = "double rocker"
     else:
-        kind = f"crank-rocker ({cycle[s]} turns fully)"
+        kind = f"crank-rocker class ({cycle[s]}, the shortest, could turn fully)"
     return FourBar(tuple(cycle), tuple(joints), lengths, grashof, kind, ref_name)
 
 

@@ -1,0 +1,114 @@
+"""``strokeopt linkage PROBLEM``: a crank-driven planar linkage analysed (structure, kinematics, transmission,
+crank torque) or, with ``--synthesize``, synthesised against the file's ``[synthesis]`` table."""
+
+from __future__ import annotations
+
+import math
+import sys
+
+from .common import _emit, _plot_path, _write_figure
+
+
+def add_linkage_parser(sub, problem_parent) -> None:
+    """Register ``linkage`` on the sub-parsers ``sub`` (problem_parent: PROBLEM, --set, --json)."""
+    from .common import DEFAULT_OUT
+
+    p = sub.add_parser("linkage", parents=[problem_parent],
+                       help="planar linkage: structure, kinematics, transmission, crank torque; --synthesize",
+                       description="Analyse the crank-driven planar linkage of a linkage problem file "
+                                   "([transmission] type = \"linkage\"): Gruebler mobility, loops, Grashof class of "
+                                   "each four-bar loop, the groups solved together; every output's position, speed, "
+                                   "acceleration and jerk over the crank angle at the file's rpm (exact: Newton "
+                                   "continuation, derivatives by AD), its swing, near-dwells (within near_dwell_pct "
+                                   "of the swing of an extreme), rise/fall asymmetry; the transmission index of "
+                                   "every group against the file's limit (Alt's angle for a dyad); with masses or "
+                                   "loads, the crank torque by the power balance checked by Newton-Euler. "
+                                   "--synthesize: link lengths and free pivots fitted to the [synthesis] table "
+                                   "(IPOPT, simultaneous form, seeded random starts), with the runners-up. "
+                                   "Exit 1 (status 'limits exceeded' or 'targets missed') when the transmission "
+                                   "index falls below its limit or a synthesis misses its RMS acceptance.",
+                       epilog="Examples: strokeopt linkage problems/loom_beatup_sixbar.toml; "
+                              "strokeopt linkage problems/blind_stitch_needle.toml --synthesize --json")
+    p.add_argument("--synthesize", action="store_true",
+                   help="fit the linkage to the file's [synthesis] targets (the file's geometry is replaced)")
+    p.add_argument("--seed", type=int, help="random seed of the synthesis (default: synthesis.seed of the file)")
+    p.add_argument("--starts", type=int, help="starts the synthesis solves (default: synthesis.starts)")
+    p.add_argument("--plot", metavar="FILE",
+                   help=f"figure file (default {DEFAULT_OUT}/<problem>_linkage.png; none with --json unless "
+                        "--plot asks; 'none' for no figure)")
+    p.set_defaults(run=cmd_linkage)
+
+
+def cmd_linkage(args) -> int:
+    from ..linkage.files import load_linkage_file
+    from ..report.format import to_json
+
+    if args.synthesize:
+        return _synthesize(args)
+    problem = load_linkage_file(args.problem, args.overrides)
+    from ..linkage.summary import summarize
+
+    summary = summarize(problem)
+    if args.json:
+        _emit(to_json(summary))
+    else:
+        from ..report.linkage import linkage_text
+
+        print(linkage_text(summary))
+    _figure(args, problem, summary, "linkage")
+    if summary["status"] != "ok":
+        bad = next(t for t in summary["transmission"] if not t["ok"])
+        print(f"strokeopt: the transmission index of {', '.join(bad['links'])} falls to {bad['min_index']:.3g} at "
+              f"{bad['at_deg']:g} deg, below the limit {bad['limit']:g}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _figure(args, problem, summary, command: str, linkage=None) -> None:
+    from ..linkage import kinematics_of
+    from ..report.linkage import plot_linkage
+
+    lk = linkage or problem.linkage
+    kin = kinematics_of(lk)
+    cycle = kin.solve(problem.angles)
+    targets = None
+    syn = problem.synthesis
+    if syn.get("output") == summary["outputs"][0]["name"] and "angles_deg" in syn:
+        t0 = math.degrees(lk.crank.reference_angle)
+        targets = ([(a - t0) % 360 for a in syn["angles_deg"]], syn["speeds_m_s"])
+    _write_figure(lambda p: plot_linkage(kin, cycle, summary, p, targets), _plot_path(args, command), args)
+
+
+def _synthesize(args) -> int:
+    from ..linkage import Kinematics
+    from ..linkage.files import load_linkage_file
+    from ..linkage.summary import summarize
+    from ..linkage.synthesis import synthesize
+    from ..report.format import to_json
+    from ..report.linkage import synthesis_text
+
+    problem = load_linkage_file(args.problem, args.overrides, check_cycle=False)
+    if not problem.synthesis:
+        from ..errors import ProblemError
+
+        raise ProblemError(args.problem, "synthesis", "--synthesize needs a [synthesis] section (targets, bounds)")
+    result = synthesize(problem, starts=args.starts, seed=args.seed)
+    report = result.to_dict(Kinematics(problem.linkage))
+    rms_max = float(problem.synthesis.get("rms_max_m_s", math.inf))
+    report["status"] = "ok" if report["best"]["rms_m_s"] <= rms_max else "targets missed"
+    problem.linkage = problem.linkage.with_reference(result.best.coords)
+    summary = summarize(problem)
+    report["analysis"] = summary
+    if args.json:
+        _emit(to_json(report))
+    else:
+        print(synthesis_text(report, rms_max))
+        from ..report.linkage import linkage_text
+
+        print("\nthe best linkage:\n" + linkage_text(summary))
+    _figure(args, problem, summary, "linkage_synthesis")
+    if report["status"] != "ok":
+        print(f"strokeopt: the best fit, RMS {report['best']['rms_m_s']:.4f} m/s, misses the acceptance "
+              f"{rms_max:g} m/s", file=sys.stderr)
+        return 1
+    return 0

@@ -1,0 +1,147 @@
+"""Linkage reports: the text of a linkage summary (strokeopt.linkage.summary), of a synthesis, and the
+figure: the mechanism at several poses with its output paths, the output over the input angle, and the
+transmission index over the cycle. Formats and draws only: the numbers come from strokeopt.linkage."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .format import format_table
+
+
+def linkage_text(s: dict) -> str:
+    st = s["structure"]
+    lines = [f"{s['problem']}  ({s['file']})",
+             f"crank {s['rpm']:g} rpm = {s['omega_rad_s']:.4f} rad/s",
+             f"structure: mobility {st['mobility']}, {st['links']} links (with the ground), "
+             f"{st['revolute_joints']} revolute joints, {st['independent_loops']} independent loops"]
+    for g in st["groups"]:
+        if g["kind"] != "placement":
+            lines.append(f"  group solved together: {g['kind']} of links {', '.join(g['links'])} "
+                         f"(joints {', '.join(g['joints'])}; attached to {', '.join(g['attached_to'])})")
+    for f in st["four_bar_loops"]:
+        lines.append(f"  four-bar loop {'-'.join(f['joints'])} ({', '.join(f['links'])}): {f['grashof']}, "
+                     f"{f['class']} relative to {f['relative_to']}")
+    c = s["closure"]
+    lines.append(f"closure: {c['angles']} input angles, largest residual {c['max_residual_m']:.1e} m, pose after one "
+                 f"turn off by {c['return_error_m']:.1e} m")
+    for o in s["outputs"]:
+        lines += ["", _output_text(o, s["near_dwell_pct"])]
+    lines.append("")
+    for t in s["transmission"]:
+        alt = f" (Alt's transmission angle {t['min_transmission_angle_deg']:.1f} deg)" \
+            if "min_transmission_angle_deg" in t else ""
+        lines.append(f"transmission index of the {t['group']} {', '.join(t['links'])}: min {t['min_index']:.3f} at "
+                     f"{t['at_deg']:g} deg{alt}; limit {t['limit']:g}: {'ok' if t['ok'] else 'BELOW THE LIMIT'}")
+    if "dynamics" in s:
+        lines += ["", _dynamics_text(s["dynamics"])]
+    return "\n".join(lines)
+
+
+def _output_text(o: dict, pct: float) -> str:
+    u, su = o["unit"], o["speed_unit"]
+    lines = [f"output {o['name']} ({o['kind']}): swing {o['swing_' + u]:.4g} {u}; minimum at {o['minimum_at_deg']:g} "
+             f"deg, maximum at {o['maximum_at_deg']:g} deg; rise {o['rise_deg']:.1f} deg, fall {o['fall_deg']:.1f} deg "
+             f"of crank (asymmetry {o['asymmetry_rise_over_fall']:.3f})"]
+    for d in o["near_dwells"]:
+        lines.append(f"  near-dwell at the {d['at']} (within {pct:g} % of the swing): {d['from_deg']:g} -> "
+                     f"{d['to_deg']:g} deg, {d['length_deg']:.1f} deg of crank")
+    p = o["peaks"]
+    lines.append(f"  peaks: |speed| {p['speed']['max_abs']:.4g} {su} at {p['speed']['at_deg']:g} deg, |acceleration| "
+                 f"{p['acceleration']['max_abs']:.4g} {o['acceleration_unit']} at {p['acceleration']['at_deg']:g} deg, "
+                 f"|jerk| {p['jerk']['max_abs']:.4g} {o['jerk_unit']} at {p['jerk']['at_deg']:g} deg")
+    rows = o["table"][::max(1, len(o["table"]) // 24)]
+    lines.append(format_table(rows, [("angle_deg", "crank deg"), ("position", f"position {u}"),
+                                     ("speed", f"speed {su}"), ("acceleration", f"accel {o['acceleration_unit']}"),
+                                     ("jerk", f"jerk {o['jerk_unit']}")]))
+    return "\n".join(lines)
+
+
+def _dynamics_text(d: dict) -> str:
+    t = d["torque_N_m"]
+    j = d["reduced_inertia_kg_m2"]
+    lines = [f"crank torque at constant speed (power balance): max {t['max']:.4g} N m at {t['max_at_deg']:g} deg, "
+             f"min {t['min']:.4g} N m at {t['min_at_deg']:g} deg, RMS {t['rms']:.4g} N m",
+             f"  reduced inertia at the crank {j['min']:.4g} .. {j['max']:.4g} kg m^2; Newton-Euler torque differs by "
+             f"{d['newton_euler_max_relative_difference']:.1e} of the peak",
+             "  peak joint reactions: " + ", ".join(f"{k} {v:.4g} N" for k, v in d["peak_reactions_N"].items())]
+    return "\n".join(lines)
+
+
+def synthesis_text(r: dict, rms_max: float) -> str:
+    b = r["best"]
+    lines = [f"synthesis: {r['starts_solved']} starts solved (best-fitting of {r['screened_feasible']} that turn fully "
+             f"among {r['geometries_screened']} random geometries), {r['seconds']:.1f} s",
+             f"best: RMS {b['rms_m_s']:.4f} m/s (acceptance {rms_max:g}), largest error {b['max_error_m_s']:.4f}, "
+             f"min transmission index {b['min_transmission_index']:.3f}, IPOPT {b['ipopt']}"]
+    if "swing_deg" in b:
+        lines.append(f"  swing {b['swing_deg']:.3f} deg, minimum at {b['minimum_at_deg']:g} deg, maximum at "
+                     f"{b['maximum_at_deg']:g} deg")
+    lines.append(format_table(b["targets"], [("angle_deg", "crank deg"), ("target", "target"), ("model", "linkage"),
+                                             ("error", "error")]))
+    for k, c in enumerate(r["runners_up"], 1):
+        lines.append(f"runner-up {k}: RMS {c['rms_m_s']:.4f} m/s" + (f", swing {c['swing_deg']:.3f} deg"
+                                                                      if "swing_deg" in c else "")
+                     + "; joints mm " + ", ".join(f"{n} ({x:g}, {y:g})" for n, (x, y) in c["joints_mm"].items()))
+    lines.append(r["note"])
+    lines.append("best joints (paste into [[transmission.joints]], mm):")
+    lines += [f"  {n}: x_mm = {x:g}, y_mm = {y:g}" for n, (x, y) in b["joints_mm"].items()]
+    return "\n".join(lines)
+
+
+def plot_linkage(kin, cycle, summary: dict, path, targets=None, poses: int = 6) -> None:
+    """Mechanism at ``poses`` input angles with the joint paths; the first output and its speed over the
+    input angle (with the table's speeds when given); the transmission index per group with the limit."""
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(2, 2, figsize=(11, 8.5))
+    _draw_mechanism(ax[0, 0], kin, cycle, poses)
+    deg = np.degrees(cycle.theta - cycle.theta[0])
+    o = summary["outputs"][0]
+    y = kin.output(cycle, o["name"])
+    scale = math.degrees(1) if o["kind"] == "angle" else 1e3
+    ax[0, 1].plot(deg, y[0] * scale)
+    ax[0, 1].set(xlabel="crank angle from the reference [deg]", ylabel=f"{o['name']} [{o['unit']}]",
+                 title=f"{o['name']}: swing {o['swing_' + o['unit']]:.3g} {o['unit']}")
+    ax[1, 0].plot(deg, y[1] * summary["omega_rad_s"], label="linkage")
+    if targets is not None:
+        ax[1, 0].plot(*targets, "o", label="table")
+        ax[1, 0].legend()
+    ax[1, 0].set(xlabel="crank angle from the reference [deg]", ylabel=f"speed [{o['speed_unit']}]")
+    for g, t in enumerate(summary["transmission"]):
+        ax[1, 1].plot(deg, cycle.index[:, g], label=f"{t['group']} {', '.join(t['links'])}")
+    if summary["transmission"]:
+        ax[1, 1].axhline(summary["transmission"][0]["limit"], color="r", ls="--", label="limit")
+    ax[1, 1].set(xlabel="crank angle from the reference [deg]", ylabel="transmission index", ylim=(0, 1.05))
+    ax[1, 1].legend(fontsize=7)
+    for a in ax.flat:
+        a.grid(alpha=0.3)
+    fig.suptitle(summary["problem"])
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def _draw_mechanism(ax, kin, cycle, poses: int) -> None:
+    lk, st = kin.linkage, kin.structure
+    n = len(cycle.theta)
+    fn = kin.closure.function("positions")
+    allpts = np.asarray(fn.map(n)(cycle.q.T, cycle.theta[None, :], np.repeat(kin.p[:, None], n, 1))).T * 1e3
+    names = [j.name for j in lk.joints]
+    for i, name in enumerate(names):
+        if name in st.unknown:
+            ax.plot(allpts[:, 2 * i], allpts[:, 2 * i + 1], lw=0.8, alpha=0.6)
+    colors = iter(np.linspace(0.2, 0.9, poses))
+    for k in np.linspace(0, n, poses, endpoint=False).astype(int):
+        c = str(next(colors))
+        pts = allpts[k].reshape(-1, 2)
+        for link in lk.links:
+            idx = [names.index(j) for j in link.joints] + [names.index(link.joints[0])]
+            ax.plot(pts[idx, 0], pts[idx, 1], "-o", color=c, ms=3, lw=1.2)
+    ground = [names.index(j.name) for j in lk.joints if j.ground]
+    ax.plot(allpts[0].reshape(-1, 2)[ground, 0], allpts[0].reshape(-1, 2)[ground, 1], "k^", ms=9)
+    for i, name in enumerate(names):
+        ax.annotate(name, allpts[0, 2 * i:2 * i + 2], fontsize=8)
+    ax.set(aspect="equal", xlabel="x [mm]", ylabel="y [mm]", title=f"{poses} poses, 360 deg / {poses} apart; paths")
