@@ -87,7 +87,7 @@ def synthesis_text(r: dict, rms_max: float) -> str:
                      + "; joints mm " + ", ".join(f"{n} ({x:g}, {y:g})" for n, (x, y) in c["joints_mm"].items()))
     lines.append(r["note"])
     lines.append("best joints (paste into [[transmission.joints]], mm):")
-    lines += [f"  {n}: x_mm = {x:g}, y_mm = {y:g}" for n, (x, y) in b["joints_mm"].items()]
+    lines += [f"  {n}: x_mm = {x}, y_mm = {y}" for n, (x, y) in b["joints_mm"].items()]
     return "\n".join(lines)
 
 

@@ -1,0 +1,96 @@
+"""``strokeopt linkage``: the command's reports, its figure, and bad geometry refused in one line naming the
+file, the field and (for geometry that cannot turn) the crank angle, with exit code 2."""
+
+from __future__ import annotations
+
+import json
+import re
+
+import pytest
+
+from strokeopt.cli.main import main
+
+from conftest import ROOT
+
+BLIND = ROOT / "problems" / "blind_stitch_needle.toml"
+LOOM = ROOT / "problems" / "loom_beatup_sixbar.toml"
+
+
+def test_linkage_json_and_figure(capsys, tmp_path):
+    fig = tmp_path / "loom.png"
+    assert main(["linkage", str(LOOM), "--json", "--plot", str(fig)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["status"] == "ok" and fig.stat().st_size > 10_000
+    # digest C: 6 links, 7 revolute joints, mobility 1; the driven chain one triad
+    st = out["structure"]
+    assert (st["mobility"], st["links"], st["revolute_joints"], st["independent_loops"]) == (1, 6, 7, 2)
+    assert [g["kind"] for g in st["groups"] if g["kind"] != "placement"] == ["triad"]
+    sley = next(o for o in out["outputs"] if o["name"] == "sley_angle")
+    # digest C: sley swing 19.5 deg (+-0.3, the synthesis's acceptance), front extreme at 355 (+-10) deg
+    assert sley["swing_deg"] == pytest.approx(19.5, abs=0.3)
+    assert min(abs(sley["minimum_at_deg"] - 355), abs(sley["minimum_at_deg"] + 5)) <= 10
+    assert {d["at"] for d in sley["near_dwells"]} == {"maximum", "minimum"}
+    assert out["closure"]["max_residual_m"] <= 1e-9
+    assert out["dynamics"]["newton_euler_max_relative_difference"] <= 1e-6
+
+
+def test_linkage_text(capsys):
+    assert main(["linkage", str(BLIND), "--plot", "none"]) == 0
+    text = capsys.readouterr().out
+    assert "mobility 1, 6 links (with the ground), 7 revolute joints, 2 independent loops" in text
+    assert "Alt's transmission angle" in text and "near-dwell" in text
+
+
+def _one_line_error(capsys, argv, field: str, angle: bool):
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert str(argv[1]) in err and field in err
+    if angle:
+        assert re.search(r"angle \d+\.\d+ deg", err), err
+    return err
+
+
+@pytest.mark.parametrize("override, field", [
+    # a crank too long for its coupler (the first four-bar turns Grashof -> non-Grashof): no closure beyond an angle
+    ("transmission.joints[2].x_mm=60", "transmission.links[2]"),
+    # the needle rocker's pivot moved: the needle dyad reaches a toggle (dead centre) inside the cycle
+    ("transmission.joints[7].x_mm=-20", "transmission.links[4]"),
+])
+def test_geometry_that_cannot_turn_is_refused_naming_the_angle(capsys, override, field):
+    err = _one_line_error(capsys, ["linkage", str(BLIND), "--set", override, "--plot", "none"], field, angle=True)
+    assert "dead centre" in err
+
+
+def test_a_link_too_short_in_the_loom(capsys):
+    # the sley shaft B0 moved 60 mm towards the coupler: the sley cannot reach D over the whole turn
+    err = _one_line_error(capsys, ["linkage", str(LOOM), "--set", "transmission.joints[7].y_mm=-40", "--plot", "none"],
+                          "transmission.links[2]", angle=True)
+    assert "rod_CE, rod_BF, coupler, sley" in err
+
+
+def _variant(tmp_path, text: str) -> str:
+    path = tmp_path / "variant.toml"
+    path.write_text(text)
+    return str(path)
+
+
+def test_structural_errors_are_refused(capsys, tmp_path):
+    text = BLIND.read_text()
+    twice = text.replace('name = "C"                    # second arm', 'name = "B"                    # second arm')
+    _one_line_error(capsys, ["linkage", _variant(tmp_path, twice)], "transmission.joints[5].name", angle=False)
+    unknown = text.replace('joints = ["C", "D"]', 'joints = ["C", "Q"]')
+    err = _one_line_error(capsys, ["linkage", _variant(tmp_path, unknown)], "transmission.links[4].joints",
+                          angle=False)
+    assert "'Q'" in err
+    extra = text.replace('joints = ["O4", "B", "C"]', 'joints = ["O4", "B"]').replace(
+        '[[transmission.links]]\nname = "coupler5"', '[[transmission.links]]\nname = "arm42"\njoints = ["O4", "C"]\n\n'
+                                                      '[[transmission.links]]\nname = "coupler5"')
+    err = _one_line_error(capsys, ["linkage", _variant(tmp_path, extra)], "transmission.links", angle=False)
+    assert "mobility 2" in err     # 3 x 6 - 2 x 8 = 2: the split rocker turns freely about O4
+
+
+def test_transmission_limit_exit_1(capsys):
+    # the blind-stitch reconstruction's needle dyad falls to sin(4.7 deg) = 0.082 (digest D reconstruction)
+    assert main(["linkage", str(BLIND), "--set", "transmission.min_transmission_index=0.1", "--plot", "none"]) == 1
+    assert "below the limit 0.1" in capsys.readouterr().err
