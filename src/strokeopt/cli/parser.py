@@ -16,7 +16,8 @@ def _problem_parent() -> argparse.ArgumentParser:
     p.add_argument("problem", metavar="PROBLEM", help="design problem file (TOML), e.g. problems/deco2000_needle_bar.toml")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY.PATH=VALUE",
                    help="override a value of the problem file, validated like the file "
-                        "(repeatable; arrays 1-based: --set 'timing.intervals[2].law=poly5')")
+                        "(repeatable; arrays 1-based: --set 'timing.intervals[2].law=poly5'; KEY=null removes "
+                        "the key: --set 'motion.law=\"poly5\"' --set motion.chi=null)")
     p.add_argument("--json", action="store_true", help="print only JSON on stdout (for scripts)")
     return p
 
@@ -161,7 +162,10 @@ def build_parser() -> argparse.ArgumentParser:
                               "strokeopt solve problems/known_optima/min_jerk.toml")
     p.add_argument("--objective", help="objective (overrides design.objective of the file); min_time answers "
                                        "'how fast can it go?'")
-    _stroke_options(p, sweep=True, law=False)
+    _stroke_options(p, sweep=True)
+    p.add_argument("--strict", action="store_true",
+                   help="a criterion the problem sets no limit for (reported 'not judged' with its value, e.g. the "
+                        "lag without [design.contact] lag_max_mm) fails the design: exit 1 (for CI)")
     _drive_options(p, "the solve re-solves the stroke at that rate on that drive. --motor/--pulley-teeth fix the "
                       "motor/pulley (the same as --set design.motor_choice='\"fixed\"' / design.pulley='\"fixed\"')")
     _verbose_option(p, "IPOPT's (and Bonmin's) output of the solve")

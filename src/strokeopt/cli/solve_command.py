@@ -141,6 +141,9 @@ def cmd_solve(args) -> int:
     if design.status == "verification failed":
         print(f"strokeopt: {design.verification['verdict']}", file=sys.stderr)
         return 1
+    if getattr(args, "strict", False) and not verified.strict_ok():
+        print(f"strokeopt: --strict: {verified.verdict}", file=sys.stderr)
+        return 1
     return 0
 
 

@@ -184,7 +184,8 @@ def _judge(design: Design, best: Outcome, drive, terms: tuple) -> None:
         design.objective_value = _fine_objective(design, best) if design.objective in TORQUE_OBJECTIVES else best.value
     if free_time(design.objective):
         design.notes.insert(0, _rate_note(design, best))
-    if drive is not None and not best.handover_values():
+    handover = any(itv.handover for itv in problem.timing.intervals)  # a machine without one has nothing to check
+    if drive is not None and handover and not best.handover_values():
         why = ("the problem has no [servo] section (servo loop and belt model)" if not terms
                and getattr(problem, "servo", None) is None else "no handover error term applies (error_terms)")
         design.notes.append(f"handover accuracy {settings.accuracy * 1e3:g} mm NOT checked: {why}")

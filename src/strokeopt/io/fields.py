@@ -161,11 +161,17 @@ def parse_override(text: str) -> tuple[list, Any]:
             raise ProblemError("--set", key, f"bad key segment {seg!r} (use names and 1-based [index])")
         path.append(m.group(1))
         path.extend(int(i) for i in re.findall(r"\[(\d+)\]", m.group(2)))
+    if value_text == "null":  # the key removed (a law parameter the new law does not take, an optional field)
+        return path, REMOVE
     try:
         value = tomllib.loads(f"v = {value_text}")["v"]
     except tomllib.TOMLDecodeError:
         value = value_text
     return path, value
+
+
+#: The value of ``--set key=null``: the key is removed from the problem (TOML has no null).
+REMOVE = object()
 
 
 def _format_path(path: list) -> str:
@@ -199,6 +205,13 @@ def apply_overrides(data: dict, overrides: list[str], file: str) -> frozenset:
         last = path[-1]
         if isinstance(last, int) or not isinstance(node, dict):
             raise ProblemError(file, _format_path(path), f"--set {text}: can only set a field of a table")
+        if value is REMOVE:
+            if last not in node:
+                raise ProblemError(file, _format_path(path), f"--set {text}: the problem has no such field to remove"
+                                                             f"{did_you_mean(last, node)}")
+            del node[last]
+            done.add(_format_path(path))
+            continue
         if isinstance(node.get(last), dict):
             raise ProblemError(file, _format_path(path), f"--set {text}: is a table; set one of its fields")
         node[last] = value
