@@ -79,3 +79,27 @@ def test_with_overrides_is_validated_and_reads_no_file(tmp_path):
     assert problem.with_overrides([]) is problem
     with pytest.raises(ProblemError, match="machine.spm"):
         problem.with_overrides(["machine.spm=-1"])
+
+
+def test_load_force_contact_position_is_stated_once(reference_path):
+    # the k2 load force starts where [model.contacts.pad] closes: 32 mm (upper dwell) - 23 mm (gap H) = 9 mm
+    # (sources A.6); change the gap or the stroke and the rigid load model follows (before: a second number,
+    # contact_position_mm = 9.0, that did not)
+    p = load_problem(reference_path)
+    (k2,) = p.drive.load.forces
+    assert k2.contact_position == pytest.approx(0.009, abs=1e-12)
+    assert p.with_overrides(["model.contacts.pad.gap_mm=20"]).drive.load.forces[0].contact_position == \
+        pytest.approx(0.012, abs=1e-12)
+    assert p.with_overrides(["timing.start_position_mm=30"]).drive.load.forces[0].contact_position == \
+        pytest.approx(0.007, abs=1e-12)
+
+
+@pytest.mark.parametrize("sets, field, words", [
+    (['drive.load_forces[1].model_contact="nope"'], "model_contact", "unknown contact 'nope'"),
+    (['drive.load_forces[1].model_contact="c21"'], "model_contact", "between control and shell"),
+    (["drive.load_forces[1].contact_position_mm=9.0"], "contact_position_mm", "comes from model_contact"),
+])
+def test_load_force_contact_errors(reference_path, sets, field, words):
+    with pytest.raises(ProblemError) as err:
+        load_problem(reference_path, sets)
+    assert err.value.field.endswith(field) and words in err.value.message

@@ -122,7 +122,8 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
     model = parse_model(top.table("model", required=False), transmission)
     scenes = parse_scenes(top.table("scenes", required=False), model)
     drive_table = top.table("drive", required=False)
-    drive = parse_drive(drive_table, (path or Path(file)).parent, model) if drive_table is not None else None
+    drive = parse_drive(drive_table, (path or Path(file)).parent, model, _model_reference(model, timing)) \
+        if drive_table is not None else None
     if model is not None and model.transmission is not None and timing.intervals[0].start_position != 0:
         raise ProblemError(file, "timing.start_position_mm", "a model on the transmission's members starts at the "
                                                              "transmission's zero: start_position_mm must be 0")
@@ -297,3 +298,13 @@ def _read_transmission(trans: Fields, timing: TimingDiagram) -> Transmission:
                                            "a longer arm or a shorter stroke")
     trans.finish()
     return tr
+
+
+def _model_reference(model, timing: TimingDiagram) -> tuple[float, float] | None:
+    """``(sign, s_ref)`` of a model driven along the stroke: its coordinate is ``sign * (s - s_ref)``, zero at
+    the start of the handover move (the first move without one), positive in its direction; None without a
+    model or for a model on a transmission's members (contact/simulate.drive_reference, the same rule)."""
+    if model is None or model.transmission is not None:
+        return None
+    move = timing.handover_move or timing.moves[0]
+    return (1.0 if move.stroke > 0 else -1.0), move.start_position

@@ -52,7 +52,7 @@ class DriveSpec:
                         self.allowable_tension)
 
 
-def parse_drive(f, base_dir: Path | None = None, model=None) -> DriveSpec:
+def parse_drive(f, base_dir: Path | None = None, model=None, reference=None) -> DriveSpec:
     """Read the ``[drive]`` table (a :class:`~strokeopt.io.fields.Fields`) of a problem file. ``model``: the
     contact model (``[model]``), whose springs a load force may name (``model_spring``) instead of its numbers."""
     motor = f.string("motor", None)
@@ -92,7 +92,7 @@ def parse_drive(f, base_dir: Path | None = None, model=None) -> DriveSpec:
         kind = row.string("kind", choices=("spring", "constant"))
         direction = {"up": 1.0, "down": -1.0}[row.string("direction", choices=("up", "down"))]
         if kind == "spring" and row.has("model_spring"):
-            forces.append(model_spring_force(row, name, direction, model))
+            forces.append(model_spring_force(row, name, direction, model, reference))
         elif kind == "spring":
             # forces up to 100 kN, stiffnesses up to 1e9 N/m (a contact, not a spring), positions within 10 m
             forces.append(LoadForce(name, kind, direction, row.number("preload_N", 0.0, min=0.0, max=1e5),
@@ -122,7 +122,7 @@ def parse_drive(f, base_dir: Path | None = None, model=None) -> DriveSpec:
 
 
 
-def model_spring_force(row, name: str, direction: float, model) -> LoadForce:
+def model_spring_force(row, name: str, direction: float, model, reference=None) -> LoadForce:
     """A spring load force taken from the contact model's spring ``model_spring`` (one source for both): its
     stiffness, and as preload the stiffness times its compression at installation (free minus installed length)."""
     spring = row.string("model_spring")
@@ -136,8 +136,34 @@ def model_spring_force(row, name: str, direction: float, model) -> LoadForce:
     el = model.springs[spring]
     if el.force_law is not None:
         raise row.error("model_spring", f"spring {spring!r} has a force law; a load force needs a linear spring")
-    return LoadForce(name, "spring", direction, el.stiffness * el.preload, el.stiffness,
-                     row.number("contact_position_mm", min=-1e4, max=1e4) * 1e-3, spring)
+    if row.has("model_contact"):
+        if row.has("contact_position_mm"):
+            raise row.error("contact_position_mm", "comes from model_contact (where that contact of [model] "
+                                                   "closes); remove it")
+        position = contact_closure_position(row, model, reference)
+    else:
+        position = row.number("contact_position_mm", min=-1e4, max=1e4) * 1e-3
+    return LoadForce(name, "spring", direction, el.stiffness * el.preload, el.stiffness, position, spring)
+
+
+def contact_closure_position(row, model, reference) -> float:
+    """The stroke position [m] at which the contact ``model_contact`` of ``[model]`` (between a body and the
+    frame) closes, in the problem's coordinates: the model's coordinate of a body is ``sign * (s - s_ref)``
+    (``reference``, zero at the start of the handover move: contact/simulate.drive_reference), so the gap
+    and the stroke are stated once, in ``[model]`` and ``[timing]``."""
+    name = row.string("model_contact")
+    if name not in model.contacts:
+        raise row.error("model_contact", f"unknown contact {name!r}; [model.contacts] has: "
+                                         f"{', '.join(model.contacts) or 'none'}")
+    el = model.contacts[name]
+    if "frame" not in el.bodies or reference is None:
+        raise row.error("model_contact", f"contact {name!r} is between {el.bodies[0]} and {el.bodies[1]}: the "
+                                         "position where a load force starts needs a contact with the frame on a "
+                                         "model driven along the stroke")
+    sign, s_ref = reference
+    # closed where x_a - x_b + offset = 0 (offset = -gap): the moving body at -offset, or at +offset
+    x = -el.offset if el.bodies[1] == "frame" else el.offset
+    return s_ref + sign * x
 
 
 def with_model_springs(load: Load, stiffness: dict) -> Load:
