@@ -23,6 +23,7 @@ from .settings import DesignSettings
 from ..drive.transmission import BeltPulley
 from ..errors import ProblemError
 from ..motion.laws import make_law
+from ..servo.error_expression import ErrorExpression  # noqa: F401  (a term's form in the NLP; servo's floor)
 
 
 @dataclass(frozen=True)
@@ -214,19 +215,6 @@ class DriveSetup:
         s = np.array([move.end_position if move is not None else 0.0])
         terms = load_torque(1e-5, BeltPulley(0.02), self.load, s, np.zeros(1), np.zeros(1))
         return float(abs(np.asarray(terms.load_force).ravel()[0]))
-
-
-@dataclass(frozen=True)
-class ErrorExpression:
-    """A handover error term in the NLP: ``signed``, the error [m] at each instant the term checks
-    (a CasADi column; the terms of one design check the same instants, or a scalar for all of
-    them), and ``bound``, a magnitude [m] added at every instant (an encoder count). The design
-    holds ``-accuracy <= signed_total -/+ bound_total <= accuracy`` row by row: constraints
-    linear in the signed error, where a maximum of absolute values would be neither smooth nor
-    sparse."""
-
-    signed: Any
-    bound: Any = 0.0
 
 
 class ErrorTerm(Protocol):

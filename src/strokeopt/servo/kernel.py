@@ -14,10 +14,10 @@ from typing import ClassVar
 import numpy as np
 
 from .accuracy import handover_accuracy
+from .error_expression import ErrorExpression
 from .loop import Gains, build_loop, tuned_gains as _tuned
 from .plant import DriveAxis, axis_from_problem
 from .settings import ServoSettings
-from ..design.request import ErrorExpression
 
 
 
