@@ -79,8 +79,8 @@ def _terms(kin: Kinematics) -> ca.Function:
     unit_loads, load_geo = [], []
     for load in lk.loads:
         link = lk.link(load.link)
-        _, angle = c.link_frame(pts, c.p, link)
-        u = rotate(ca.DM([math.cos(load.direction), math.sin(load.direction)]), angle)
+        line = pts[link.joints[1]] - pts[link.joints[0]]
+        u = rotate(line / ca.norm_2(line), load.direction)
         r = c.taylor(pts[load.joint])[2]
         unit_loads.append(ca.dot(u, ca.jacobian(r, s)))
         load_geo += [u, pts[load.joint]]
@@ -94,7 +94,8 @@ def _terms(kin: Kinematics) -> ca.Function:
 
 def analyse_dynamics(kin: Kinematics, cycle: Cycle, omega: float) -> Dynamics:
     """Reduced inertia, power-balance torque and Newton-Euler reactions over ``cycle`` at ``omega``."""
-    key = ("dynamics", len(cycle.theta))
+    lk = kin.linkage   # the Function holds the masses and centres of gravity: they are in its key
+    key = ("dynamics", len(cycle.theta), tuple((k.mass, k.cg, k.inertia_cg) for k in lk.links), lk.loads, lk.gravity)
     if key not in kin._mapped:
         kin._mapped[key] = _terms(kin).map(len(cycle.theta))
     J, dJ, dV, unit, ne, geo, joints = _along(kin, cycle, key)

@@ -204,6 +204,6 @@ def _read_load(lf: Fields, names: list[str], links: list[Link]) -> Load:
         raise lf.error("to_deg", f"the window {start:g} -> {end:g} deg must be 0 to 360 deg long")
     f0 = lf.number("force_start_N", min=-1e7, max=1e7)
     f1 = lf.number("force_end_N", min=-1e7, max=1e7)
-    direction = lf.number("direction_deg", min=-360, max=360)
+    direction = lf.number("direction_deg", min=-360, max=360)   # from the link's line (first -> second joint)
     lf.finish()
     return Load(name, lname, joint, math.radians(start), math.radians(end), f0, f1, math.radians(direction))

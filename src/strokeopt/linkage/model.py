@@ -73,7 +73,8 @@ class Output:
 class Load:
     """A process force on joint ``joint`` of link ``link``: magnitude ramped linearly from ``force_start``
     to ``force_end`` [N] while the input angle runs from ``start`` to ``end`` [rad] (mod one turn), zero
-    elsewhere; its direction is ``direction`` [rad] at the reference pose and turns with the link."""
+    elsewhere; its direction is ``direction`` [rad] counter-clockwise from the link's line (its first joint
+    to its second), so it turns with the link (pi/2: perpendicular, counter-clockwise about the first)."""
 
     name: str
     link: str
@@ -122,7 +123,17 @@ class Linkage:
         """The same linkage with other reference coordinates (flat, as :meth:`reference`)."""
         coords = np.asarray(coords, dtype=float).reshape(-1, 2)
         joints = tuple(Joint(j.name, float(c[0]), float(c[1]), j.ground) for j, c in zip(self.joints, coords))
-        return Linkage(joints, self.links, self.crank, self.outputs, self.loads, self.gravity, self.file,
+        index = {j.name: i for i, j in enumerate(self.joints)}
+        links = []
+        for link in self.links:   # a centre of gravity keeps its place in its link's frame (metres)
+            if link.cg is not None:
+                old = [self.joints[index[n]].xy for n in link.joints[:2]]
+                new = [coords[index[n]] for n in link.joints[:2]]
+                u, w = _frame(*old) @ (np.asarray(link.cg) - old[0])
+                ex, ey = _frame(*new)
+                link = Link(link.name, link.joints, link.mass, tuple(new[0] + u * ex + w * ey), link.inertia_cg)
+            links.append(link)
+        return Linkage(joints, tuple(links), self.crank, self.outputs, self.loads, self.gravity, self.file,
                        self.name, self.fields)
 
     def field_of(self, key: str, default: str = "") -> str:
@@ -131,3 +142,9 @@ class Linkage:
     def length(self, a: str, b: str) -> float:
         """Distance of two joints at the reference pose [m]."""
         return float(math.dist(self.joint(a).xy, self.joint(b).xy))
+
+
+def _frame(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Rows: the unit vector from a to b and its counter-clockwise normal."""
+    e = (b - a) / np.linalg.norm(b - a)
+    return np.array([e, [-e[1], e[0]]])

@@ -75,6 +75,10 @@ def synthesize(problem, starts: int | None = None, screen: int | None = None, se
     kin = kinematics_of(problem.linkage) if _closes(problem) else Kinematics(problem.linkage)
     rng = np.random.default_rng(seed if seed is not None else spec.seed)
     pool, tried = _screen(kin, spec, problem, rng, screen or spec.screen)
+    if spec.start_from_file:
+        q = kin.screen(360)
+        if q is not None:
+            pool.insert(0, (0.0, problem.linkage.reference(), q))
     if not pool:
         raise ProblemError(problem.file, "synthesis", f"none of {tried} random geometries inside the stated bounds "
                                                        "turns fully: widen coordinate_box_mm or the length bounds")
@@ -91,7 +95,7 @@ def synthesize(problem, starts: int | None = None, screen: int | None = None, se
         raise ProblemError(problem.file, "synthesis", f"no start of {starts} gave a linkage that turns fully and "
                                                        "passes the analysis")
     distinct = []
-    for c in found[1:]:
+    for c in (c for c in found[1:] if c.rms <= spec.rms_max):   # runners-up that meet the acceptance too
         if all(np.abs(c.lengths(kin) - d.lengths(kin)).max() > 1e-3 for d in [found[0], *distinct]):
             distinct.append(c)
     return SynthesisResult(found[0], distinct[:3], min(starts, len(pool)), tried, len(pool),
@@ -284,6 +288,9 @@ class _Nlp:
             cycle = kin.solve(self.problem.angles)
         except ProblemError as exc:
             self.last_refusal = exc.message
+            return None
+        if not self.spec.shape_ok(kin.linkage):
+            self.last_refusal = f"IPOPT ended ({status}) outside the bounds or the fixed shape"
             return None
         report = fit_report(kin, cycle, self.spec, self.problem)
         if report["min_transmission_index"] < self.spec.index_min - 1e-6:

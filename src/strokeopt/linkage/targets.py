@@ -36,6 +36,26 @@ class SynthesisSpec:
     minimum_at: float = 0.0         # input angle of swing_output's minimum [rad]
     minimum_tol: float = 0.0
     defect_tol: float = 2e-3        # m, trapezoidal tie between nodes (a branch change breaks it by far more)
+    start_from_file: bool = False   # the file's own geometry is one of the starts
+
+    def shape_ok(self, linkage, tol: float = 1e-6) -> bool:
+        """Bounds, fixed lengths and fixed angles hold (a start IPOPT left infeasible does not)."""
+        if not self.lengths_ok_within(linkage, tol):
+            return False
+        xy = {j.name: j.xy for j in linkage.joints}
+        for (a, b), length in self.fixed_lengths:
+            if abs(np.linalg.norm(xy[b] - xy[a]) - length) > tol:
+                return False
+        for (a, b), (c, d), angle in self.fixed_angles:
+            u, w = xy[b] - xy[a], xy[d] - xy[c]
+            got = math.atan2(u[0] * w[1] - u[1] * w[0], u @ w)
+            if abs(math.remainder(got - angle, 2 * math.pi)) > tol:
+                return False
+        return True
+
+    def lengths_ok_within(self, linkage, tol: float) -> bool:
+        return all(self.length_min - tol <= linkage.length(a, b) <= self.length_max + tol
+                   for link in linkage.links for i, a in enumerate(link.joints) for b in link.joints[i + 1:])
 
     def nodes(self, theta0: float) -> list:
         """Node angles: every NODE_STEP_DEG from the reference, plus the table's angles (reference first)."""
@@ -125,6 +145,7 @@ def read_spec(problem, f: Fields) -> SynthesisSpec:
         f.number("coordinate_box_mm", min=1, max=1e4) / 1e3, problem.min_transmission_index,
         f.number("starts", 8, min=1, max=200, integer=True), f.number("screen", 1500, min=10, max=100000, integer=True),
         f.number("seed", 1, min=0, max=2 ** 31, integer=True))
+    spec.start_from_file = f.boolean("start_from_file", False)
     if f.has("swing_deg"):
         spec.swing_output = f.string("swing_output", choices=tuple(outputs))
         spec.swing = math.radians(f.number("swing_deg", min=0.1, max=180))
