@@ -6,12 +6,15 @@ screening and synthesis). A distance row is ``(|pa - pb|^2 - L^2) / (2 L)``: met
 its gradient is the unit vector along the link, so the Jacobian's rows are normalised and the
 determinant of a dyad's block is the sine of Alt's transmission angle.
 
-Derivatives with respect to the input are algorithmic: ``q' = -Phi_q^-1 Phi_theta`` (the implicit
-function theorem) written as an SX expression of (q, theta), and every higher derivative is the total
-derivative ``D e = e_q q' + e_theta`` of the expression before, applied by AD (never by hand).
+Derivatives with respect to the input are algorithmic, never hand-written: ``q' = -Phi_q^-1 Phi_theta``
+(the implicit-function formula), and the higher ones order by order in Taylor mode (AD of the closure
+along a polynomial of the pose, solved with the same block-triangular Jacobian); an output's or a
+centre of gravity's derivatives by AD along the pose's Taylor polynomial (:meth:`Closure.taylor`).
 """
 
 from __future__ import annotations
+
+import math
 
 import casadi as ca
 
@@ -107,16 +110,6 @@ class Closure:
                 rows.append(pts[eq.c] - (pts[eq.a] + alpha * e + beta * perp(e)))
         return ca.vertcat(*rows)
 
-    def total_derivative(self, expr):
-        """d expr / d theta along the closed linkage: expr_q q' + expr_theta (by AD)."""
-        return ca.jtimes(expr, self.q, self.qd) + ca.jacobian(expr, self.theta)
-
-    def derivatives(self, expr, order: int = 3) -> list:
-        out = [expr]
-        for _ in range(order):
-            out.append(self.total_derivative(out[-1]))
-        return out
-
     def link_frame(self, pts: dict, p, link):
         """The pose of ``link``: a function placing a reference point [m] where the link has carried it,
         and the link's angle from its reference orientation (first two joints of its data)."""
@@ -190,7 +183,20 @@ class Closure:
         return ca.Function("positions", [self.q, self.theta, self.p], [flat], ["q", "theta", "p"], ["xy"])
 
     def _make_derivatives(self) -> ca.Function:
-        q1, q2, q3 = self.derivatives(self.q)[1:]
+        """The pose's first three derivatives q_1, q_2, q_3 in Taylor mode: the k-th derivative in s of
+        Phi(q + sum_{j<k} q_j s^j / j!, theta + s) at s = 0 (by AD) holds every term of the k-th total
+        derivative of Phi = 0 but Phi_q q_k, so
+        q_k = -Phi_q^-1 times it (the implicit-function formula, order by order)."""
+        s = ca.SX.sym("s")
+        out, poly = [], self.q
+        for k in range(1, 4):
+            e = ca.substitute(self.phi, ca.vertcat(self.q, self.theta), ca.vertcat(poly, self.theta + s))
+            for _ in range(k):
+                e = ca.jacobian(e, s)
+            qk = self.block_solve(self.phi_q, -ca.substitute(e, s, 0))
+            out.append(qk)
+            poly = poly + qk * s ** k / math.factorial(k)
+        q1, q2, q3 = out
         return ca.Function("pose_derivatives", [self.q, self.theta, self.p], [q1, q2, q3],
                            ["q", "theta", "p"], ["dq", "d2q", "d3q"])
 
