@@ -16,6 +16,7 @@ import numpy as np
 from .accuracy import handover_accuracy
 from .error_expression import ErrorExpression
 from .loop import Gains, build_loop, tuned_gains as _tuned
+from .lti import forced_response
 from .plant import DriveAxis, axis_from_problem
 from .settings import ServoSettings
 
@@ -55,8 +56,6 @@ _KERNELS: dict = {}
 
 def error_kernel(axis: DriveAxis, settings: ServoSettings, gains: Gains, period: float) -> ErrorKernel:
     """The :class:`ErrorKernel` of a loop for a cycle of ``period`` seconds (cached)."""
-    import control
-
     key = (axis, settings, gains, round(period, 12))
     if key in _KERNELS:
         return _KERNELS[key]
@@ -70,7 +69,7 @@ def error_kernel(axis: DriveAxis, settings: ServoSettings, gains: Gains, period:
     td = np.clip(t - d, 0.0, None)
     s_ref = td**2 / 2  # the bar position commanded by a unit step of acceleration at t = 0, as the loop sees it
     u = np.vstack([s_ref / r, td / r, axis.total_inertia / r * np.ones_like(t), 0 * t])
-    x = np.asarray(control.forced_response(loop.system, t, u).outputs)[2]
+    x = forced_response(loop.system, t, u)[0][2]
     e_step = s_ref - x
     k = np.gradient(e_step, t)
     n_per = int(round(period / step))

@@ -7,7 +7,7 @@ into the loop's inputs as the drive reads its position table, and
 :func:`periodic_response` gives the periodic steady state the accuracy
 prediction (:mod:`.accuracy`) reads.
 
-The model (python-control, continuous time, linear):
+The model (continuous time, linear; state space and responses in numpy, :mod:`.lti`):
 
 * **Servo drive**: a cascade position / speed loop (Control Techniques
   Digitax ST, digest A.5): P position controller ``Kp``, PI speed
@@ -49,6 +49,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ProblemError, SolverError
+from .lti import StateSpace, pade, pade_delay, periodic_steady_state, stability_margins
 from .plant import DriveAxis
 from .settings import ServoSettings
 
@@ -122,24 +123,25 @@ def tuned_gains(axis: DriveAxis, settings: ServoSettings) -> Gains:
 # --------------------------------------------------------------------------- the closed loop
 
 
-def open_loop(axis: DriveAxis, settings: ServoSettings, gains: Gains):
-    """Loop transfer function (python-control), broken at the torque command:
-    ``Kv (1 + 1/(Ti s)) (1 + Kp/s) D(s) omega/tau``."""
-    import control
+def open_loop(axis: DriveAxis, settings: ServoSettings, gains: Gains) -> tuple[np.ndarray, np.ndarray]:
+    """Loop transfer function broken at the torque command, ``Kv (1 + 1/(Ti s)) (1 + Kp/s) D(s) omega/tau``,
+    as numerator and denominator coefficients (highest power of ``s`` first).
 
-    b = [[0], [1 / axis.motor_inertia], [0], [0]]  # input tau
-    plant = control.ss2tf(control.ss(axis.state_matrix(), b, [[0, 1, 0, 0]], 0))  # output omega
-    num, den = control.pade(settings.sum_small_time_constants, settings.pade_order)
-    s = control.tf("s")
-    pi = gains.speed_gain * (1 + 1 / (gains.speed_integral_time * s))
-    return control.minreal(pi * (1 + gains.position_gain / s) * plant * control.tf(num, den), verbose=False)
+    The plant's ``omega/tau`` in closed form: ``(m s^2 + c s + k) / (s (J m s^2 + c J_tot s + k J_tot))``
+    with ``J_tot = J + m r^2`` (the motor angle's double integrator, one of its poles cancelled by the
+    speed output's zero at the origin); ``D(s)`` the Padé approximation of the loop delay."""
+    j, m, c, k = axis.motor_inertia, axis.mass, axis.belt_damping, axis.belt_stiffness
+    j_tot = axis.total_inertia
+    kp, kv, ti = gains.position_gain, gains.speed_gain, gains.speed_integral_time
+    pade_num, pade_den = pade(settings.sum_small_time_constants, settings.pade_order)
+    num = kv * np.polymul(np.polymul(np.polymul([ti, 1.0], [1.0, kp]), [m, c, k]), pade_num)
+    den = np.polymul(np.polymul([ti, 0.0, 0.0, 0.0], [j * m, c * j_tot, k * j_tot]), pade_den)
+    return num, den
 
 
 def loop_margins(axis: DriveAxis, settings: ServoSettings, gains: Gains) -> dict:
     """Gain margin, phase margin [deg] and modulus margin (distance of the Nyquist curve to -1)."""
-    import control
-
-    gms, pms, sms, *_ = control.stability_margins(open_loop(axis, settings, gains), returnall=True)
+    gms, pms, sms = stability_margins(*open_loop(axis, settings, gains))
     # the gain may rise by the smallest factor > 1 at a phase crossover (the integrators make
     # crossovers at low frequency where the gain could only fall: those are not margins)
     up = [float(g) for g in np.atleast_1d(gms) if g > 1]
@@ -163,7 +165,7 @@ def _robust(axis: DriveAxis, settings: ServoSettings, gains: Gains) -> bool:
 
 @dataclass
 class ServoLoop:
-    """The closed loop as one python-control state-space system.
+    """The closed loop as one state-space system (:class:`~.lti.StateSpace`).
 
     Inputs ``theta_ref, omega_ff, tau_ff, F_ext``; outputs ``theta`` (motor
     angle), ``stretch`` (r theta - x), ``x`` (bar), ``tau_cmd`` (torque
@@ -173,7 +175,7 @@ class ServoLoop:
     axis: DriveAxis
     settings: ServoSettings
     gains: Gains
-    system: object  # control.StateSpace
+    system: StateSpace
 
     @property
     def poles(self) -> np.ndarray:
@@ -185,36 +187,50 @@ class ServoLoop:
 
 
 def build_loop(axis: DriveAxis, settings: ServoSettings, gains: Gains | None = None) -> ServoLoop:
-    """The closed loop (python-control state space); :class:`SolverError` if it is unstable."""
-    import control
-
+    """The closed loop (state space); :class:`SolverError` if it is unstable."""
     gains = gains or tune(axis, settings)
     for name, value in (("position_gain_1_s", gains.position_gain), ("speed_gain_N_m_s_rad", gains.speed_gain),
                         ("speed_integral_time_ms", gains.speed_integral_time)):
         if not (value > 0 and math.isfinite(value)):
             raise ProblemError(settings.file, f"servo.{name}", f"must be positive, got {value!r}")
     j, r, m = axis.motor_inertia, axis.radius, axis.mass
-    # plant: states theta, omega, x, v; inputs tau, F_ext; outputs theta, omega, stretch, x
-    a = axis.state_matrix()
-    b = np.array([[0, 0], [1 / j, 0], [0, 0], [0, 1 / m]])
-    cmat = np.array([[1, 0, 0, 0], [0, 1, 0, 0], [r, 0, -1, 0], [0, 0, 1, 0]])
-    plant = control.ss(a, b, cmat, np.zeros((4, 2)), inputs=["tau", "F_ext"],
-                       outputs=["theta", "omega", "stretch", "x"], name="plant")
-    num, den = control.pade(settings.sum_small_time_constants, settings.pade_order)
-    delay = control.tf2ss(control.tf(num, den), inputs=["tau_cmd"], outputs=["tau"], name="delay")
     kp, kv, ti = gains.position_gain, gains.speed_gain, gains.speed_integral_time
-    # PI speed controller with the P position controller and the feed-forwards:
+    delay = pade_delay(settings.sum_small_time_constants, settings.pade_order)
+    nd = delay.nstates
+    # states: plant theta, omega, x, v (0-3); the delay's (4 .. 3 + nd); the speed controller's integral z
+    # inputs: theta_ref, omega_ff, tau_ff, F_ext; outputs: theta, stretch (r theta - x), x, tau_cmd
+    n = 4 + nd + 1
+    # the PI speed controller with the P position controller and the feed-forwards:
     # e_w = kp (theta_ref - theta) + omega_ff - omega;  z' = e_w;  tau_cmd = kv e_w + kv/ti z + tau_ff
-    row = np.array([[kp, 1.0, 0.0, -kp, -1.0]])  # over inputs theta_ref, omega_ff, tau_ff, theta, omega
-    ctrl = control.ss(np.zeros((1, 1)), row, np.array([[kv / ti]]), kv * row + np.array([[0, 0, 1.0, 0, 0]]),
-                      inputs=["theta_ref", "omega_ff", "tau_ff", "theta", "omega"], outputs=["tau_cmd"],
-                      name="controller")
-    system = control.interconnect(
-        [plant, delay, ctrl], inplist=["theta_ref", "omega_ff", "tau_ff", "F_ext"],
-        outlist=["theta", "stretch", "x", "tau_cmd"], inputs=["theta_ref", "omega_ff", "tau_ff", "F_ext"],
-        outputs=["theta", "stretch", "x", "tau_cmd"], name="servo_loop")
-    system = control.ss(system)
-    loop = ServoLoop(axis, settings, gains, system)
+    e_x = np.zeros(n)
+    e_x[[0, 1]] = -kp, -1.0
+    e_u = np.array([kp, 1.0, 0.0, 0.0])
+    cmd_x = kv * e_x
+    cmd_x[-1] = kv / ti
+    cmd_u = kv * e_u + np.array([0.0, 0.0, 1.0, 0.0])
+    # the torque at the motor: the delay's output, tau = C_d x_d + D_d tau_cmd
+    tau_x = float(delay.D[0, 0]) * cmd_x
+    tau_x[4:4 + nd] += delay.C[0]
+    tau_u = float(delay.D[0, 0]) * cmd_u
+    a = np.zeros((n, n))
+    b = np.zeros((n, 4))
+    a[:4, :4] = axis.state_matrix()
+    a[1] += tau_x / j  # J omega' = tau - r F_belt
+    b[1] += tau_u / j
+    b[3, 3] = 1 / m  # m v' = F_belt + F_ext
+    a[4:4 + nd, 4:4 + nd] = delay.A
+    a[4:4 + nd] += np.outer(delay.B[:, 0], cmd_x)
+    b[4:4 + nd] += np.outer(delay.B[:, 0], cmd_u)
+    a[-1] = e_x
+    b[-1] = e_u
+    c = np.zeros((4, n))
+    c[0, 0] = 1.0
+    c[1, 0], c[1, 2] = r, -1.0
+    c[2, 2] = 1.0
+    c[3] = cmd_x
+    d = np.zeros((4, 4))
+    d[3] = cmd_u
+    loop = ServoLoop(axis, settings, gains, StateSpace(a, b, c, d))
     if loop.stability_margin() >= 0:
         raise SolverError(f"the servo loop is unstable with these gains (Kp = {kp:.4g} 1/s, Kv = {kv:.4g} N m s/rad, "
                           f"Ti = {ti * 1e3:.4g} ms, loop delay {settings.sum_small_time_constants * 1e6:.0f} us, "
@@ -306,24 +322,12 @@ def simulate_loop(loop: ServoLoop, stroke, t: np.ndarray | None = None, *, force
     return t, periodic_response(loop.system, t, u)[0], u
 
 
-def periodic_response(sys, t: np.ndarray, *inputs: np.ndarray) -> list[np.ndarray]:
+def periodic_response(sys: StateSpace, t: np.ndarray, *inputs: np.ndarray) -> list[np.ndarray]:
     """Outputs of the periodic steady state for each periodic input over one period ``t``.
 
-    The state at the cycle start solves ``x0 = Phi x0 + x_forced(T)`` with the
-    state transition ``Phi = exp(A T)`` (the closed loop is stable, so
-    ``I - Phi`` is invertible). Several inputs are simulated at once, as
-    copies of the system side by side.
+    The state at the cycle start solves ``x0 = Phi x0 + x_forced(T)`` with the state transition
+    ``Phi = exp(A T)`` (the closed loop is stable, so ``I - Phi`` is invertible); the inputs are
+    simulated together, one set of inputs per column of the state (:func:`.lti.periodic_steady_state`).
     """
-    import control
-    import scipy.linalg
-
-    n = len(inputs)
-    big = control.append(*([sys] * n)) if n > 1 else sys
-    u = np.vstack(inputs)
-    free = control.forced_response(big, t, u, initial_state=np.zeros(big.nstates), return_states=True)
-    phi = scipy.linalg.expm(sys.A * (t[-1] - t[0]))
-    ns = sys.nstates
-    x0 = np.concatenate([np.linalg.solve(np.eye(ns) - phi, free.states[i * ns:(i + 1) * ns, -1]) for i in range(n)])
-    out = np.asarray(control.forced_response(big, t, u, initial_state=x0).outputs)
-    no = sys.noutputs
-    return [out[i * no:(i + 1) * no] for i in range(n)]
+    y = periodic_steady_state(sys, t, np.stack(inputs, axis=-1))
+    return [y[:, :, i] for i in range(len(inputs))]
