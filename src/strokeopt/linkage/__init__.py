@@ -7,11 +7,13 @@ linkage problem file (files.py).
         -> Structure          mobility, loops, Grashof four-bars, groups solved together
         -> Kinematics.solve   Newton continuation over the input, derivatives by AD
         -> dynamics           reduced inertia, power-balance torque, Newton-Euler reactions
+        -> summary            what the command reports; synthesis.py fits a geometry to a table
 """
 
 from .model import Crank, Joint, Link, Linkage, Load, Output
 from .structure import Structure, analyse_structure
 from .kinematics import Cycle, Kinematics, kinematics_of
+from .files import LinkageProblem, load_linkage_file
 
-__all__ = ["Crank", "Cycle", "Joint", "Kinematics", "Link", "Linkage", "Load", "Output", "Structure",
-           "analyse_structure", "kinematics_of"]
+__all__ = ["Crank", "Cycle", "Joint", "Kinematics", "Link", "Linkage", "LinkageProblem", "Load", "Output",
+           "Structure", "analyse_structure", "kinematics_of", "load_linkage_file"]

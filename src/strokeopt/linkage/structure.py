@@ -13,7 +13,6 @@ intersection; a triad (the loom's 4 links, 6 joints) is not, and is solved as on
 from __future__ import annotations
 
 import itertools
-import math
 from dataclasses import dataclass
 
 import casadi as ca
@@ -227,7 +226,3 @@ def _classify(linkage: Linkage, cycle, joints) -> FourBar:
     else:
         kind = f"crank-rocker class ({cycle[s]}, the shortest, could turn fully)"
     return FourBar(tuple(cycle), tuple(joints), lengths, grashof, kind, ref_name)
-
-
-def reference_angle(dx: float, dy: float) -> float:
-    return math.atan2(dy, dx)

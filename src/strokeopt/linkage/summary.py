@@ -68,7 +68,8 @@ def transmission_summary(kin: Kinematics, cycle: Cycle, limit: float) -> list[di
     for g, group in enumerate(cycle.groups):
         idx = cycle.index[:, g]
         k = int(np.argmin(idx))
-        row = {"group": group.kind, "links": list(group.links), "min_index": float(idx[k]), "at_deg": _deg(cycle.theta[k]),
+        row = {"group": group.kind, "links": list(group.links), "min_index": float(idx[k]),
+               "at_deg": _deg(cycle.theta[k]),
                "limit": limit, "ok": bool(idx[k] >= limit)}
         if group.kind == "dyad":   # Alt's transmission angle: the index is its sine
             row["min_transmission_angle_deg"] = math.degrees(math.asin(min(1.0, idx[k])))
