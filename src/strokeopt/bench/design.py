@@ -45,15 +45,6 @@ def _bench_design_resolve() -> BenchResult:
 @benchmark("design_reference", "full reference design: every catalogue motor, pulley radius then teeth "
                                "(problems/deco2000_needle_bar.toml defaults)", target_s=10.0)
 def _bench_design_reference() -> BenchResult:
-    import sys
-
-
-    # python-control (the servo loop of the handover accuracy term) is imported once per
-    # process, mostly scipy.signal and matplotlib: timed on its own row, not in the design
-    fresh = "control" not in sys.modules
-    t0 = time.perf_counter()
-    import control  # noqa: F401
-    imported = time.perf_counter() - t0
     p = load_problem(reference_problem_path())
     clear_cache()
     t0 = time.perf_counter()
@@ -65,11 +56,10 @@ def _bench_design_reference() -> BenchResult:
     fixed = time.perf_counter() - t0
     return BenchResult(rows=[BenchRow("catalogue design (7 motors, radius then teeth)", full,
                                       f"chose {d.motor}, {d.pulley_teeth} teeth"),
-                             BenchRow("one motor, one pulley (the thesis drive)", fixed),
-                             BenchRow("import python-control (once per process, not in the design)", imported,
-                                      "" if fresh else "already imported by an earlier benchmark")],
+                             BenchRow("one motor, one pulley (the thesis drive)", fixed)],
                        measured_s=full, ratio=full / fixed, ratio_label="catalogue / single drive",
-                       notes=["includes the servo-loop tuning of the handover accuracy term (once per process)"])
+                       notes=["includes the servo-loop tuning of the handover accuracy term (numpy, no python-control; "
+                              "the command's parts: benchmark solve_parts)"])
 
 @benchmark("design_expand_jit", "CasADi options side by side on one design NLP (min peak acceleration, "
                                 "jerk bound, 2 moves x 40 intervals): build + solve", target_s=None)
