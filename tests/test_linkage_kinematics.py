@@ -181,3 +181,13 @@ def test_blind_stitch_reconstruction_matches_the_speed_table():
     v = y[1, idx] * problem.omega
     rms = math.sqrt(np.mean((v - np.array(problem.synthesis["speeds_m_s"])) ** 2))
     assert rms == pytest.approx(0.034, abs=0.0005)
+
+
+@pytest.mark.parametrize("n", [4, 3])
+def test_coarse_sampling_keeps_the_branch(solved, n):
+    # a grid coarser than the longest continuation step is walked in substeps (halved where a step jumps):
+    # the poses at 90 and 120 deg steps are those of the 720-angle cycle, on the same assembly branch
+    _, kin, cycle = solved
+    coarse = kin.solve(n)
+    assert coarse.substeps > n
+    assert np.abs(coarse.q - cycle.q[::720 // n]).max() <= 1e-11

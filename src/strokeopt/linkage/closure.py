@@ -160,21 +160,23 @@ class Closure:
 
     def _make_step(self) -> ca.Function:
         """One continuation step: first-order prediction from (q0, theta0) to theta1, then Newton.
-        Returns the pose, its largest residual [m], the Newton correction and the move the transfer
-        function predicts (|q'| at both ends times the step: at a reversal q' passes 0 in between)."""
+        Returns the pose, its largest residual [m], the Newton correction and the correction the second
+        transfer function predicts: |q''| (mean of both ends) h^2 / 2, the remainder of a first-order
+        prediction. A correction far above it is a jump to another assembly branch."""
         q0, t0, t1 = ca.SX.sym("q0", self.q.shape[0]), ca.SX.sym("t0"), ca.SX.sym("t1")
-        qd0 = ca.substitute(self.qd, ca.vertcat(self.q, self.theta), ca.vertcat(q0, t0))
+        derivs = self.function("derivatives")
+        qd0, qdd0, _ = derivs(q0, t0, self.p)
         pred = q0 + qd0 * (t1 - t0)
         q = pred
         res = ca.Function("r", [self.q, self.theta, self.p], [self.phi, self.phi_q])
         for _ in range(NEWTON_STEPS):
             phi, jac = res(q, t1, self.p)
-            q = q - ca.solve(jac, phi)
+            q = q - self.block_solve(jac, phi)
         phi, _ = res(q, t1, self.p)
-        qd1 = ca.substitute(self.qd, ca.vertcat(self.q, self.theta), ca.vertcat(q, t1))
-        move = (ca.norm_2(qd0) + ca.norm_2(qd1)) * ca.fabs(t1 - t0)
+        _, qdd1, _ = derivs(q, t1, self.p)
+        expected = (ca.norm_2(qdd0) + ca.norm_2(qdd1)) / 4 * (t1 - t0) ** 2
         return ca.Function("continuation_step", [q0, t0, t1, self.p],
-                           [q, ca.mmax(ca.fabs(phi)), ca.norm_2(q - pred), move],
+                           [q, ca.mmax(ca.fabs(phi)), ca.norm_2(q - pred), expected],
                            ["q0", "theta0", "theta1", "p"], ["q", "residual", "correction", "move"])
 
     def _make_positions(self) -> ca.Function:

@@ -25,8 +25,9 @@ from .model import Linkage
 from .structure import Structure, analyse_structure
 
 RESIDUAL_TOL = 1e-11     # m, largest closure residual accepted after a step
-JUMP_RATIO = 1.0         # a Newton correction above the predicted move halves the step (a branch jump)
+JUMP_RATIO = 4.0         # a Newton correction above this multiple of the one q'' predicts halves the step
 MIN_STEP = 1e-7          # rad, below this a step that still fails is a dead centre or no closure
+MAX_STEP = math.radians(2.0)  # rad, the longest continuation step (a coarser grid is walked in substeps)
 TOGGLE_INDEX = 1e-4      # transmission index below this: the chain passes a dead centre
 RETURN_TOL = 1e-9        # m, the pose after one turn against the start
 
@@ -77,7 +78,8 @@ class Kinematics:
         return other
 
     def screen(self, n: int = 360) -> np.ndarray | None:
-        """The poses at n angles by the fast walk only (no refusal): None where it fails or does not return."""
+        """The poses at n angles (n >= 180) by the fast walk only (no refusal): None where it fails or does
+        not return to the start."""
         grid = self.linkage.crank.reference_angle + 2 * math.pi * np.arange(n + 1) / n
         q = self._fast_walk(grid)
         if q is None or np.linalg.norm(q[-1] - q[0]) > RETURN_TOL:
@@ -88,9 +90,9 @@ class Kinematics:
     def solve(self, n: int = 720) -> Cycle:
         theta0 = self.linkage.crank.reference_angle
         grid = theta0 + 2 * math.pi * np.arange(n + 1) / n
-        q = self._fast_walk(grid)
+        q = self._fast_walk(grid) if 2 * math.pi / n <= MAX_STEP else None
         substeps = n
-        if q is None:
+        if q is None or np.linalg.norm(q[-1] - q[0]) > RETURN_TOL:
             q, substeps = self._careful_walk(grid)
         ret = float(np.linalg.norm(q[-1] - q[0]))
         if ret > RETURN_TOL:
@@ -135,7 +137,7 @@ class Kinematics:
         out, count = [q], 0
         for target in grid[1:]:
             while t < target - 1e-15:
-                h = target - t
+                h = min(target - t, MAX_STEP)
                 while True:
                     q_new, res, corr, move = (np.asarray(v).ravel() for v in step(q, t, t + h, self.p))
                     if res[0] <= RESIDUAL_TOL and corr[0] <= JUMP_RATIO * move[0] + 1e-13:
