@@ -53,3 +53,25 @@ def test_bench_text_and_unknown_name(capsys):
     assert "ratio y / x: 3.0x" in text and "target: under 0.5 s" in text and "met" in text
     assert main(["bench", "--only", "nope"]) == 2
     assert "unknown benchmark 'nope'" in capsys.readouterr().err
+
+
+def test_solve_parts_names_functions_that_exist_and_counts_own_time():
+    # every part of the timed reference solve wraps a function that is there (none would be reported missing),
+    # and a part called inside another counts in the inner one only
+    import importlib
+    import time
+
+    from strokeopt.bench.solve_parts import PARTS, _Clock
+
+    for _, targets in PARTS:
+        for module, name in targets:
+            owner = importlib.import_module(module)
+            for part in name.split("."):
+                owner = getattr(owner, part)
+            assert callable(owner), (module, name)
+    clock = _Clock()
+    inner = clock.timed("inner", lambda: time.sleep(0.02))
+    outer = clock.timed("outer", lambda: (time.sleep(0.01), inner()))
+    outer()
+    assert clock.calls == {"inner": 1, "outer": 1}
+    assert 0.02 <= clock.own["inner"] < 0.2 and 0.01 <= clock.own["outer"] < 0.02 + 0.1
