@@ -12,10 +12,12 @@ REFERENCE = ROOT / "problems" / "deco2000_needle_bar.toml"
 
 def stated_k2(text: str) -> str:
     """The reference's text with the drive's k2 load force stated by its own numbers instead of
-    ``model_spring = "k2"`` (for variants without [model], or that state k2 twice on purpose)."""
+    ``model_spring = "k2"`` and ``model_contact = "pad"`` (for variants without [model], or that state k2
+    twice on purpose): 15.39 N preload, 900 N/m, from 32 - 23 = 9 mm."""
     import re
 
-    return re.sub(r'model_spring = "k2"[^\n]*\n', "preload_N = 15.39\nstiffness_N_m = 900\n", text)
+    text = re.sub(r'model_spring = "k2"[^\n]*\n', "preload_N = 15.39\nstiffness_N_m = 900\n", text)
+    return re.sub(r'model_contact = "pad"[^\n]*\n( {2,}#[^\n]*\n)*', "contact_position_mm = 9.0\n", text)
 
 
 @pytest.fixture(scope="session")

@@ -62,7 +62,6 @@ def test_load_problem_takes_one_override_as_a_string(reference_path):
     ({"schema_version": 99}, "schema_version: 99: written by a newer strokeopt; this one reads design files up to "
                              "schema 2"),
     ({"schema_version": "2"}, "schema_version: must be a positive whole number, got '2'"),
-    ({"schema_version": None, "version": None}, "schema_version: is missing"),
 ])
 def test_design_file_schema_is_checked(tmp_path, capsys, design_dir, edit, words):
     # one versioned schema: a newer file is refused saying what to do, a file of the first schema (no

@@ -7,7 +7,7 @@ Last step of the design's flow (:mod:`.solve` makes them). Files: :mod:`strokeop
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -63,9 +63,10 @@ class MoveResult:
         }
 
 
-@dataclass
+@dataclass(frozen=True)
 class Design:
-    """An optimised stroke with its choices and its constraint report."""
+    """An optimised stroke with its choices and its constraint report. Immutable: a judged design is a new
+    one (``dataclasses.replace``: :func:`strokeopt.studies.verified.verify_design` adds the verification)."""
 
     problem: Any
     spm: float
@@ -193,9 +194,11 @@ def design_from_data(problem, data: dict, stroke: StrokeFunction) -> Design:
                     fine_grid=dict(data.get("fine_grid", {})), pulley_teeth=data.get("pulley_teeth"),
                     pitch_diameter=None if pd is None else pd * 1e-3, motor=data.get("motor"),
                     notes=list(data.get("notes", [])))
-    design.settings = getattr(problem, "design", None)
-    if design.motor is not None and getattr(problem, "drive", None) is not None:  # the file's names, resolved once
-        design.drive = resolve_drive(problem, motor=design.motor, pulley_teeth=design.pulley_teeth,
-                                     pitch_diameter=design.pitch_diameter, include_pulley_inertia=getattr(
-                                         design.settings, "include_pulley_inertia", True))
-    return design
+    settings = getattr(problem, "design", None)
+    if design.motor is None or getattr(problem, "drive", None) is None:
+        return replace(design, settings=settings)
+    # the file's names, resolved once
+    drive = resolve_drive(problem, motor=design.motor, pulley_teeth=design.pulley_teeth,
+                          pitch_diameter=design.pitch_diameter,
+                          include_pulley_inertia=getattr(settings, "include_pulley_inertia", True))
+    return replace(design, settings=settings, drive=drive)

@@ -90,21 +90,17 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     nlp, sols = best.nlp, best.sols
     stroke = stroke_from_solutions(problem, spm, sols, label=f"optimal ({req.objective})")
     moves = move_results(nlp.request.moves, sols)
+    resolved = None if drive is None else resolve_drive(  # the parts chosen, resolved once and handed on
+        problem, motor=motor, pulley_teeth=teeth, pitch_diameter=pd, include_pulley_inertia=settings.include_pulley_inertia)
+    checks, active = _report_checks(best)
     design = Design(problem, spm, req.objective, best.value, nlp.graph.unit, stroke, moves, nlp.request.mesh,
-                    best.status, wall, best.iterations, fine_grid=best.fine, pulley_teeth=teeth, pitch_diameter=pd,
-                    motor=None if motor is None else motor.name, notes=notes)
-    design.settings = settings
-    if drive is not None:  # the parts chosen, resolved once and handed on with the design
-        design.drive = resolve_drive(problem, motor=motor, pulley_teeth=teeth, pitch_diameter=pd,
-                                     include_pulley_inertia=settings.include_pulley_inertia)
-    design.accuracy_enforced = bool(nlp.request.enforce_accuracy and terms)
-    design.free_parameters = free
-    _settings_notes(design, settings, nlp, drive)
-    design.checks, design.active_constraints = _report_checks(best)
-    if handover_check is not None and any(c["name"].startswith(HANDOVER_CHECK) for c in design.checks):
-        design.checks = _verified_handover(design, *handover_check(design), settings.check_tolerance)
-    _judge(design, best, drive, terms)
-    return design
+                    best.status, wall, best.iterations, checks=checks, active_constraints=active, fine_grid=best.fine,
+                    pulley_teeth=teeth, pitch_diameter=pd, motor=None if motor is None else motor.name,
+                    notes=notes + _settings_notes(settings, free, nlp, drive), drive=resolved, settings=settings,
+                    accuracy_enforced=bool(nlp.request.enforce_accuracy and terms), free_parameters=free)
+    if handover_check is not None and any(c["name"].startswith(HANDOVER_CHECK) for c in checks):
+        design = replace(design, checks=_verified_handover(design, *handover_check(design), settings.check_tolerance))
+    return _judge(design, best, drive, terms)
 
 
 def _request(problem, objective, spm, settings, warm_start, verbose) -> SolveRequest:
@@ -137,63 +133,68 @@ def _request(problem, objective, spm, settings, warm_start, verbose) -> SolveReq
                         error_terms=terms, enforce_accuracy=held)
 
 
-def _settings_notes(design: Design, settings: DesignSettings, nlp, drive) -> None:
+def _settings_notes(settings: DesignSettings, free: list, nlp, drive) -> list[str]:
     """The notes that say what the settings did: free parameters found, the jerk bound, the torque reserve."""
-    for row in design.free_parameters:
-        design.notes.append(f"free model parameter {row['parameter']} = {row['value']:.5g} (bounds {row['lower']:g} "
-                            f"to {row['upper']:g})" + (f": at its {row['at_bound']} bound" if row["at_bound"] else ""))
+    notes = []
+    for row in free:
+        notes.append(f"free model parameter {row['parameter']} = {row['value']:.5g} (bounds {row['lower']:g} "
+                     f"to {row['upper']:g})" + (f": at its {row['at_bound']} bound" if row["at_bound"] else ""))
     if settings.jerk_max_from_law and settings.jerk_law_spm:
-        design.notes.append(f"jerk bound: the peak jerk of each move's law at {settings.jerk_law_spm:g} spm ([design] "
-                            f"jerk_max_from_law = {settings.jerk_law_spm:g}), in m/s^3 at every rate (" + ", ".join(
-                                f"move {mv.index} {mv.jerk_bound:.4g}" for mv in nlp.request.moves) + ")")
+        notes.append(f"jerk bound: the peak jerk of each move's law at {settings.jerk_law_spm:g} spm ([design] "
+                     f"jerk_max_from_law = {settings.jerk_law_spm:g}), in m/s^3 at every rate (" + ", ".join(
+                         f"move {mv.index} {mv.jerk_bound:.4g}" for mv in nlp.request.moves) + ")")
     if settings.torque_reserve and drive is not None:
-        design.notes.append(f"torque reserve: the design uses at most {100 * (1 - settings.torque_reserve):g} % of "
-                            f"the torque limit, {100 * settings.torque_reserve:g} % kept in reserve for the servo "
-                            "loop ([design] torque_reserve_pct)")
+        notes.append(f"torque reserve: the design uses at most {100 * (1 - settings.torque_reserve):g} % of "
+                     f"the torque limit, {100 * settings.torque_reserve:g} % kept in reserve for the servo "
+                     "loop ([design] torque_reserve_pct)")
+    return notes
 
 
-def _judge(design: Design, best: Outcome, drive, terms: tuple) -> None:
-    """The design's status and notes from its checks: limits exceeded (not enforced, between nodes, or by the
-    full simulation), the objective as the fine grid reads it, the rate note of a free cycle time."""
+def _judge(design: Design, best: Outcome, drive, terms: tuple) -> Design:
+    """The design with its status and notes from its checks: limits exceeded (not enforced, between nodes, or by
+    the full simulation), the objective as the fine grid reads it, the rate note of a free cycle time."""
     settings, problem = design.settings, design.problem
+    status, notes = design.status, list(design.notes)
     failed = [c for c in design.checks if not c["ok"] and "design_term" not in c]
     held = enforced_checks(settings, drive is not None and drive.stepper)
     relaxed = [c for c in failed if c["name"] in ENFORCED_CHECKS - held]
     failed = [c for c in failed if c not in relaxed]
     if relaxed:  # the stepper's pull-out curve not held ([design] enforce_pull_out = false): said, not hidden
-        design.status = "limits exceeded"
-        design.notes.insert(0, "limits exceeded, not enforced ([design] enforce_pull_out = false): " + "; ".join(
+        status = "limits exceeded"
+        notes.insert(0, "limits exceeded, not enforced ([design] enforce_pull_out = false): " + "; ".join(
             f"{c['name']} {format_value(c['value'])} {c['unit']} > limit {format_value(c['limit'])} {c['unit']} "
             f"({-100 * c['margin']:.1f} % over)" for c in relaxed) + ": the motor cannot make this move")
     if failed:  # beyond check_tolerance after every refinement: not a design to build
-        design.status = "limits exceeded"
-        design.notes.insert(0, "limits exceeded between collocation nodes: " + "; ".join(
+        status = "limits exceeded"
+        notes.insert(0, "limits exceeded between collocation nodes: " + "; ".join(
             f"{c['name']} {format_value(c['value'])} {c['unit']} > limit {format_value(c['limit'])} "
             f"({-100 * c['margin']:.2f} % over)" for c in failed) + "; use more mesh intervals ([design] "
             "mesh_intervals) or refinements")
     verified = [c for c in design.checks if not c["ok"] and "design_term" in c]
     if verified:  # the design's terms held, the full simulation of the design does not
-        design.status = "limits exceeded"
-        design.notes.insert(0, "; ".join(
+        status = "limits exceeded"
+        notes.insert(0, "; ".join(
             f"{c['name']} {format_value(c['value'])} {c['unit']} > limit {format_value(c['limit'])} "
             f"({-100 * c['margin']:.2f} % over), although the design's term gives "
             f"{format_value(c['design_term'])} {c['unit']}" for c in verified)
             + ": tighten [design] accuracy_mm or lower the stitch rate")
+    value = design.objective_value
     if drive is not None:
         # the objective as the fine grid reads it (the NLP saw the nodes)
-        design.objective_value = _fine_objective(design, best) if design.objective in TORQUE_OBJECTIVES else best.value
+        value = _fine_objective(design, best) if design.objective in TORQUE_OBJECTIVES else best.value
     if free_time(design.objective):
-        design.notes.insert(0, _rate_note(design, best))
+        notes.insert(0, _rate_note(design, best))
     handover = any(itv.handover for itv in problem.timing.intervals)  # a machine without one has nothing to check
     if drive is not None and handover and not best.handover_values():
         why = ("the problem has no [servo] section (servo loop and belt model)" if not terms
                and getattr(problem, "servo", None) is None else "no handover error term applies (error_terms)")
-        design.notes.append(f"handover accuracy {settings.accuracy * 1e3:g} mm NOT checked: {why}")
+        notes.append(f"handover accuracy {settings.accuracy * 1e3:g} mm NOT checked: {why}")
     if best.fine["worst_relative_violation"] > settings.check_tolerance:
-        design.notes.append(f"between collocation nodes a limit is exceeded by "
+        notes.append(f"between collocation nodes a limit is exceeded by "
                             f"{100 * best.fine['worst_relative_violation']:.2f} % (more than check_tolerance "
                             f"{100 * settings.check_tolerance:g} %) after {settings.refinements} refinements: "
                             f"use more mesh intervals")
+    return replace(design, status=status, notes=notes, objective_value=value)
 
 
 def _rate_note(design: Design, best: Outcome) -> str:

@@ -152,10 +152,7 @@ SCHEMA_VERSION = 2
 def schema_version(data: dict, file: str) -> int:
     """The schema version of the design data ``data`` read from ``file``, refused when it is not one this
     strokeopt reads."""
-    version = data.get("schema_version", 1 if data.get("version") == 1 else None)
-    if version is None:
-        raise ProblemError(file, "schema_version", "is missing (and no \"version\": 1 of the first schema): is this "
-                                                   "a design.json written by 'strokeopt solve --out DIR'?")
+    version = data.get("schema_version", 1)  # none: the first schema (its files say "version": 1)
     if isinstance(version, bool) or not isinstance(version, int) or version < 1:
         raise ProblemError(file, "schema_version", f"must be a positive whole number, got {version!r}: is this a "
                                                    "design.json written by 'strokeopt solve --out DIR'?")

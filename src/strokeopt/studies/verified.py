@@ -14,7 +14,7 @@ one with unjudged criteria is "solved, N criteria not judged", never "verified".
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from ..contact.verify import LIMIT_FIELDS, design_verification, verify
@@ -127,9 +127,8 @@ def verify_design(design, *, accuracy=None, compare: bool = False, scenes=None, 
         for name in scenes or ():
             if name not in results:
                 results[name] = verify(design, name, options)
-        design.verification = block
-        if block["status"] != "ok" and design.status not in FAILED_STATES:
-            design.status = "verification failed"
+        failed = block["status"] != "ok" and design.status not in FAILED_STATES
+        design = replace(design, verification=block, status="verification failed" if failed else design.status)
     unjudged = _unjudged(block)
     return VerifiedDesign(design, accuracy, block, results, compare_with_laws(design) if compare else [],
                           design.status, _verdict(design, block, unjudged), unjudged)
