@@ -204,7 +204,7 @@ class _Nlp:
             obj += self._swing(p, extra, y, add)
         x = ca.veccat(p, Q, QD, extra)
         self.solver = ca.nlpsol("synthesis", "ipopt", {"x": x, "f": obj, "g": ca.vertcat(*g)},
-                                {"ipopt.print_level": 0, "print_time": False, "ipopt.max_iter": 300,
+                                {"ipopt.print_level": 0, "print_time": False, "ipopt.max_iter": 1000,
                                  "ipopt.tol": 1e-9, "ipopt.sb": "yes", "expand": True})
         self.lbg, self.ubg = np.array(lbg), np.array(ubg)
         self.sizes = (npar, nq, m, extra.shape)
