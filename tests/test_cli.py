@@ -50,7 +50,7 @@ def test_help_teaches(capsys):
 
 
 def test_solve_help_names_every_objective(capsys):
-    from strokeopt.design.objectives import OBJECTIVES
+    from strokeopt.design.transcription.objectives import OBJECTIVES
 
     with pytest.raises(SystemExit):
         main(["solve", "--help"])

@@ -134,7 +134,7 @@ def test_accuracy_with_an_optimal_design(capsys, reference, reference_path, tmp_
     # the residual vibration of the optimal stroke next to the classic laws (issue scope 3)
     from dataclasses import replace
 
-    from strokeopt.design.settings import DesignSettings
+    from strokeopt.design.transcription.settings import DesignSettings
     from strokeopt.design.solve import solve_design
 
     settings = replace(reference.design or DesignSettings(), motor_choice="fixed", pulley="fixed", mesh_intervals=20)
@@ -157,7 +157,7 @@ def test_accuracy_uses_the_drive_of_the_design(capsys, reference_path, tmp_path)
     # a design solved on a 22-tooth pulley is checked on that pulley and its motor, not the file's 28 teeth
     from dataclasses import replace
 
-    from strokeopt.design.settings import DesignSettings
+    from strokeopt.design.transcription.settings import DesignSettings
     from strokeopt.design.solve import solve_design
     from strokeopt.files.design_file import read_design
     from strokeopt.files.problem_file import load_problem

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from numpy.polynomial import Polynomial
 
-from strokeopt.design.collocation import Mesh, MoveSolution, MoveVariables, fine_grid, move_piece, node_times
+from strokeopt.design.transcription.collocation import Mesh, MoveSolution, MoveVariables, fine_grid, move_piece, node_times
 
 POLY5 = Polynomial([0, 0, 0, 10, -15, 6])
 

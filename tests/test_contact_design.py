@@ -106,7 +106,7 @@ def test_min_time_without_a_jerk_bound_continues_past_the_iteration_limit():
 
 def test_jerk_bound_of_the_law_at_a_stated_rate(write_problem, capsys):
     # jerk_max_from_law = <spm>: the law's peak jerk C_j h / T^3 with the move's duration at that rate, in m/s^3
-    from strokeopt.design.request import design_moves
+    from strokeopt.design.transcription.request import design_moves
 
     problem, path = contact_problem(write_problem, 'keep_closed = ["c21"]', ["design.jerk_max_from_law=600"])
     assert problem.design.jerk_max_from_law and problem.design.jerk_law_spm == 600
@@ -167,8 +167,8 @@ def test_impact_limit_whose_pin_move_failed_keeps_the_solution_before_it():
 
 
 def test_no_contact_section_builds_no_contact_rows(reference):
-    from strokeopt.design.nlp import prepare
-    from strokeopt.design.request import DriveChoice, DriveSetup, SolveRequest
+    from strokeopt.design.transcription.nlp import prepare
+    from strokeopt.design.transcription.request import DriveChoice, DriveSetup, SolveRequest
 
     settings = reference.design
     assert settings.contact is None

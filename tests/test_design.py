@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from strokeopt import ProblemError, SolverError, load_problem
-from strokeopt.design.collocation import Mesh, MoveSolution
+from strokeopt.design.transcription.collocation import Mesh, MoveSolution
 from strokeopt.design.compare import compare_with_laws
-from strokeopt.design.settings import DesignSettings
+from strokeopt.design.transcription.settings import DesignSettings
 from strokeopt.design.solve import solve_design
 from strokeopt.studies.sweeps import fastest_feasible, sweep_design
 from strokeopt.files.design_file import read_design
@@ -48,7 +48,7 @@ def test_velocity_hull_is_the_bernstein_form_of_the_velocity():
 
     import casadi as ca
 
-    from strokeopt.design.collocation import MoveVariables
+    from strokeopt.design.transcription.collocation import MoveVariables
 
     mesh = Mesh(3, 3)
     rng = np.random.default_rng(1)
@@ -264,8 +264,8 @@ def test_bonmin_and_enumeration_choose_the_same_motor(capfd):
 
 
 def test_nlp_cache_is_bounded_and_keyed_without_ids():
-    from strokeopt.design.nlp import NLP_CACHE, NlpCache, structure_key
-    from strokeopt.design.request import SolveRequest
+    from strokeopt.design.transcription.nlp import NLP_CACHE, NlpCache, structure_key
+    from strokeopt.design.transcription.request import SolveRequest
 
     p = load_problem(KNOWN / "min_jerk.toml")
     d = solve_design(p)

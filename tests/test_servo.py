@@ -258,7 +258,7 @@ def test_design_with_the_accuracy_constraint_resimulates_within_it(setup):
     # full loop model (table sampling, load forces, worst table phase), meets 0.5 mm; and a tight
     # 0.05 mm constraint (active in the design) holds in the re-simulation to within the effects
     # the design's term leaves out
-    from strokeopt.design.settings import DesignSettings
+    from strokeopt.design.transcription.settings import DesignSettings
     from strokeopt.design.solve import solve_design
 
     problem, settings, axis, gains = setup

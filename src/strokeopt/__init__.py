@@ -29,10 +29,10 @@ from .drive.checks import Check, DriveLimits, drive_checks
 from .drive.load import Load, LoadForce, load_torque
 from .drive.sizing import optimal_radius, size_drive
 from .drive.spec import DriveSpec
-from .design.collocation import Mesh
-from .design.objectives import OBJECTIVES
+from .design.transcription.collocation import Mesh
+from .design.transcription.objectives import OBJECTIVES
 from .design.result import Design
-from .design.settings import DesignSettings
+from .design.transcription.settings import DesignSettings
 from .design.compare import compare_with_laws
 from .report.design import design_text
 from .studies.sweeps import mesh_study, sweep_design

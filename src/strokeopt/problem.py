@@ -17,9 +17,9 @@ from typing import TYPE_CHECKING
 
 from .contact.model import parse_model
 from .contact.scene import parse_scenes
-from .design.contact_setup import check_contact
-from .design.free import check_free
-from .design.settings import parse_design
+from .design.transcription.contact_setup import check_contact
+from .design.transcription.free import check_free
+from .design.transcription.settings import parse_design
 from .drive.spec import parse_drive
 from .drive.transmission import PROFILE_PITCH, TEETH_RANGE, BeltPulley, ScrewLever, Transmission
 from .errors import ProblemError
@@ -32,7 +32,7 @@ from .servo.settings import parse_servo
 if TYPE_CHECKING:
     from .contact.model import Model
     from .contact.scene import Scene
-    from .design.settings import DesignSettings
+    from .design.transcription.settings import DesignSettings
     from .drive.spec import DriveSpec
     from .servo.settings import ServoSettings
 

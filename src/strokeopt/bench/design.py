@@ -7,11 +7,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..design.nlp import clear_cache
-from ..design.refine import solve_one
-from ..design.request import DriveChoice, DriveSetup, SolveRequest
+from ..design.transcription.nlp import clear_cache
+from ..design.search.refine import solve_one
+from ..design.transcription.request import DriveChoice, DriveSetup, SolveRequest
 from ..design.solve import solve_design
-from ..design.solver import solver_options
+from ..design.transcription.solver import solver_options
 from ..files.problem_file import load_problem
 from .registry import BenchResult, BenchRow, benchmark, best_time, reference_problem_path
 
@@ -190,7 +190,7 @@ def _with_options(problem, options: dict):
     """The problem's [design] settings with ``options`` over its solver options (CasADi/IPOPT)."""
     from dataclasses import replace
 
-    from ..design.settings import DesignSettings
+    from ..design.transcription.settings import DesignSettings
 
     settings = problem.design or DesignSettings()
     return replace(settings, solver_options={**settings.solver_options, **options})

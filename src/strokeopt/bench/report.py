@@ -7,7 +7,7 @@ import time
 from pathlib import Path
 
 from ..design.compare import compare_with_laws
-from ..design.nlp import clear_cache
+from ..design.transcription.nlp import clear_cache
 from ..design.solve import solve_design
 from ..files.problem_file import load_problem
 from ..report.design import design_summary

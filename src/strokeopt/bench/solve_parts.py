@@ -31,9 +31,9 @@ PARTS = (
     ("problem file", [("strokeopt.files.problem_file", "load_problem")]),
     ("servo loop tuning", [("strokeopt.servo.loop", "tune")]),
     ("servo kernel numbers", [("strokeopt.servo.kernel", "_servo_numbers")]),
-    ("NLP build (symbols, derivatives, numbers)", [("strokeopt.design.nlp", "build_graph"),
+    ("NLP build (symbols, derivatives, numbers)", [("strokeopt.design.transcription.nlp", "build_graph"),
                                                    ("casadi", "nlpsol"),
-                                                   ("strokeopt.design.nlp", "Built.numbers")]),
+                                                   ("strokeopt.design.transcription.nlp", "Built.numbers")]),
     ("IPOPT", []),  # the calls of the solvers nlpsol built
     ("design checks (fine grid, pins, solution)", [("strokeopt.studies.verified", "solve_design")]),
     ("verification: full servo simulation", [("strokeopt.servo.accuracy", "design_accuracy")]),

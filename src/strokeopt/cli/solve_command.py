@@ -46,7 +46,7 @@ def _cam_spec(args):
 
 
 def cmd_solve(args) -> int:
-    from ..design.objectives import OBJECTIVES
+    from ..design.transcription.objectives import OBJECTIVES
     from ..studies.sweeps import fastest_feasible, mesh_study, sweep_design
     from ..report.design import design_text, plot_design, plot_design_sweep, plot_mesh_study
     from ..report.format import drive_text, format_table, to_json

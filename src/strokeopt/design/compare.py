@@ -11,11 +11,11 @@ import math
 
 import numpy as np
 
-from .limits import ENFORCED_CHECKS
-from .request import design_moves
+from .transcription.limits import ENFORCED_CHECKS
+from .transcription.request import design_moves
 from .result import Design
 from .torque import design_drive as _design_drive
-from .settings import DesignSettings
+from .transcription.settings import DesignSettings
 from ..motion.laws import make_law
 from ..motion.stroke import StrokeFunction
 
@@ -111,7 +111,7 @@ def compare_with_laws(design: Design, laws=None) -> list[dict]:
 
 def _contact_violations(problem, settings: DesignSettings, stroke: StrokeFunction, samples: int = 20_001) -> list[str]:
     """The ``[design.contact]`` limits a stroke breaks (design/contact_limits.py), on a fine sample of the cycle."""
-    from .contact_setup import contact_design
+    from .transcription.contact_setup import contact_design
 
     cd = contact_design(problem, settings)
     if cd is None:

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from .collocation import Mesh, MoveSolution, move_piece
+from .transcription.collocation import Mesh, MoveSolution, fine_grid, move_piece
 from ..drive.selection import resolve_drive
 from ..motion.stroke import StrokeFunction, dwell_piece
 
@@ -61,6 +61,22 @@ class MoveResult:
             "direction": move_direction(self.stroke),
             "v_max_m_s": self.v_max, "a_max_m_s2": self.a_max, "jerk_max_m_s3": self.jerk_max, "C_a": self.C_a,
         }
+
+
+def move_results(moves: list[Move], sols: list[MoveSolution], per_interval: int = 50) -> list[MoveResult]:
+    """Peaks of each move from its polynomials on a fine grid (exact polynomials, numpy)."""
+    out = []
+    for mv, sol in zip(moves, sols):
+        tau = fine_grid(sol.mesh, per_interval)
+        _, y1, y2, y3, _ = sol.evaluate(tau)
+        # the jerk is one-sided at the mesh joints: include the left side too
+        tn = np.arange(1, sol.mesh.intervals) * sol.mesh.h
+        y3_left = sol.evaluate(tn - 1e-9 * sol.mesh.h)[3] if len(tn) else np.zeros(0)
+        j_max = float(max(np.max(np.abs(y3)), np.max(np.abs(y3_left), initial=0.0)))
+        c_a = float(np.max(np.abs(y2)))
+        out.append(MoveResult(mv.index, mv.interval, mv.name, mv.t_start, mv.duration, mv.start, mv.stroke, sol,
+                              float(np.max(np.abs(y1))) * mv.v_scale, c_a * mv.a_scale, j_max * mv.j_scale, c_a))
+    return out
 
 
 @dataclass(frozen=True)

@@ -35,19 +35,19 @@ from dataclasses import replace
 
 import casadi as ca
 
-from .contact_limits import CONTACT_LIMITS
-from .fine_grid import move_results
-from .free import free_overrides, free_report
-from .limits import DRIVE_LIMITS, ENFORCED_CHECKS, MOVE_LIMITS, enforced_checks
-from .nlp import prepare
-from .objectives import (OBJECTIVES, TORQUE_OBJECTIVES, free_time, needs_drive_error, needs_terms,
+from .transcription.contact_limits import CONTACT_LIMITS
+from .result import move_results
+from .transcription.free import free_overrides, free_report
+from .transcription.limits import DRIVE_LIMITS, ENFORCED_CHECKS, MOVE_LIMITS, enforced_checks
+from .transcription.nlp import prepare
+from .transcription.objectives import (OBJECTIVES, TORQUE_OBJECTIVES, free_time, needs_drive_error, needs_terms,
                          unknown_objective_error)
-from .parts import choose_parts
-from .refine import RATE_TOLERANCE, Outcome, solve_one
-from .request import DriveChoice, DriveSetup, SolveRequest
+from .search.parts import choose_parts
+from .search.refine import RATE_TOLERANCE, Outcome, solve_one
+from .transcription.request import DriveChoice, DriveSetup, SolveRequest
 from .result import Design, stroke_from_solutions
-from .settings import DesignSettings
-from .solver import solver_options as _solver_options
+from .transcription.settings import DesignSettings
+from .transcription.solver import solver_options as _solver_options
 from ..drive.selection import resolve_drive
 from ..errors import ProblemError, SolverError
 from ..io.plain import format_value

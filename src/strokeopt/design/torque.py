@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .request import DriveSetup
-from .settings import DesignSettings
+from .transcription.request import DriveSetup
+from .transcription.settings import DesignSettings
 
 
 def design_drive(design):

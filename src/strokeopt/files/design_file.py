@@ -42,7 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..design.collocation import Mesh, MoveSolution, move_piece
+from ..design.transcription.collocation import Mesh, MoveSolution, move_piece
 from ..errors import ProblemError, SolverError
 from ..problem import SPM_RANGE
 from .problem_file import load_problem

@@ -6,7 +6,7 @@ from __future__ import annotations
 from ..drive.checks import torque_limit_text
 from .format import format_table, format_value, period_text
 from ..design.result import Design, design_summary, move_direction  # noqa: F401 (design_summary: read from here too)
-from ..design.settings import DesignSettings
+from ..design.transcription.settings import DesignSettings
 
 
 def plot_mesh_study(rows: list[dict], path=None):

@@ -298,8 +298,8 @@ def section_verification(d: ReportData) -> str:
 
 
 def section_numerics(d: ReportData) -> str:
-    from ..design.settings import DesignSettings
-    from ..design.solver import solver_options
+    from ..design.transcription.settings import DesignSettings
+    from ..design.transcription.solver import solver_options
 
     s, design = d.summary, d.design
     settings = design.settings or DesignSettings()

@@ -2,7 +2,7 @@
 
 It lives here, on the servo's floor, because the servo's term (:mod:`.kernel`) returns one and the
 servo package does not import the design package above it; the design names it
-:class:`strokeopt.design.request.ErrorExpression` (the same class) and sums the terms it is given.
+:class:`strokeopt.design.transcription.request.ErrorExpression` (the same class) and sums the terms it is given.
 """
 
 from __future__ import annotations

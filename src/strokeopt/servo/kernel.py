@@ -90,7 +90,7 @@ KERNEL_POINTS = 6
 
 @dataclass(frozen=True)
 class ServoErrorTerm:
-    """The servo's handover error term of the design (a :class:`strokeopt.design.request.ErrorTerm`):
+    """The servo's handover error term of the design (a :class:`strokeopt.design.transcription.request.ErrorTerm`):
     the bar's error over the handover window (the end of the handover move and :data:`WINDOW_POINTS`
     instants after it) from the servo loop and the belt, ``|e_motion + e_load| + one count`` at each.
 
@@ -139,7 +139,7 @@ class ServoErrorTerm:
 def _servo_numbers(req) -> dict:
     """The numbers of :class:`ServoErrorTerm` for one solve (speed, motor, pulley): kernel weights
     per move, load error, encoder count. Computed once per solve (``req.cache``, the solve's
-    :class:`~strokeopt.design.request.SolveRequest`)."""
+    :class:`~strokeopt.design.transcription.request.SolveRequest`)."""
     cache = req.cache
     if "servo" in cache:
         return cache["servo"]

@@ -10,8 +10,8 @@ from __future__ import annotations
 import time
 from dataclasses import replace
 
-from ..design.nlp import clear_cache
-from ..design.settings import DesignSettings
+from ..design.transcription.nlp import clear_cache
+from ..design.transcription.settings import DesignSettings
 from ..design.solve import solve_design
 from ..errors import ProblemError, SolverError
 from .verified import solve_verified

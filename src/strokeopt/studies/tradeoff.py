@@ -222,7 +222,7 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
     as for the classic law, so the two curves compare strokes on one drive. ``progress(step, text)``
     is called once per step (a line per solve or simulation).
     """
-    from ..design.settings import DesignSettings
+    from ..design.transcription.settings import DesignSettings
     from ..design.solve import solve_design
 
     accuracies = sorted(a * 1e-3 for a in DEFAULT_ACCURACIES_MM) if accuracies is None else sorted(accuracies)
@@ -392,7 +392,7 @@ def tradeoff_optimal_bisection(problem, accuracies=None, *, resolution: float = 
     motor and pulley are the problem's (``drive.motor``, ``pulley_teeth``), as
     for the classic law, so the two curves compare strokes on one drive.
     """
-    from ..design.settings import DesignSettings
+    from ..design.transcription.settings import DesignSettings
     from ..design.solve import solve_design
 
     accuracies = sorted(a * 1e-3 for a in DEFAULT_ACCURACIES_MM) if accuracies is None else sorted(accuracies)

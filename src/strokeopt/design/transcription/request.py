@@ -20,10 +20,10 @@ import numpy as np
 from .collocation import Mesh
 from .contact_setup import ContactDesign, contact_design
 from .settings import DesignSettings
-from ..drive.transmission import BeltPulley
-from ..errors import ProblemError
-from ..motion.laws import make_law
-from ..servo.error_expression import ErrorExpression  # noqa: F401  (a term's form in the NLP; servo's floor)
+from ...drive.transmission import BeltPulley
+from ...errors import ProblemError
+from ...motion.laws import make_law
+from ...servo.error_expression import ErrorExpression  # noqa: F401  (a term's form in the NLP; servo's floor)
 
 
 @dataclass(frozen=True)
@@ -158,7 +158,7 @@ class DriveSetup:
                            [m.peak_torque for m in self.catalogue.motors.values()] or [1.0])
 
     def pulley(self, teeth: int):
-        from ..drive.selection import catalogue_pulley
+        from ...drive.selection import catalogue_pulley
 
         return catalogue_pulley(self.catalogue, self.profile, teeth)
 
@@ -178,7 +178,7 @@ class DriveSetup:
         return self.catalogue.actuator(self.spec.motor, (self.file, "drive.motor"))
 
     def radius_bounds(self) -> tuple[float, float]:
-        from ..drive.transmission import pitch_diameter
+        from ...drive.transmission import pitch_diameter
 
         return pitch_diameter(self.profile, self.teeth_range[0]) / 2, pitch_diameter(self.profile, self.teeth_range[1]) / 2
 
@@ -195,7 +195,7 @@ class DriveSetup:
         """The belt check that binds first: (the drive package's check name, allowable tension [N], the check's limit, unit)."""
         if self.belt is None:
             return None
-        from ..drive.checks import belt_load
+        from ...drive.checks import belt_load
 
         grooves = teeth if teeth is not None else self.teeth_range[0]  # conservative for a continuous radius
         unit = belt_load(1.0, grooves, self.belt)  # everything is linear in the tension
@@ -209,7 +209,7 @@ class DriveSetup:
 
     def handover_force(self) -> float:
         """|Effective belt tension| [N] at rest at the handover position (gravity and load forces)."""
-        from ..drive.load import load_torque
+        from ...drive.load import load_torque
 
         move = self.problem.timing.handover_move
         s = np.array([move.end_position if move is not None else 0.0])

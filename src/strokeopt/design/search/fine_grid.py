@@ -9,11 +9,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .collocation import MoveSolution, fine_grid, node_times
-from .pins import crossings, switch_positions
-from .request import DriveSetup, Move
-from .result import MoveResult
-from ..drive.transmission import BeltPulley
+from ..transcription.collocation import MoveSolution, fine_grid, node_times
+from ..transcription.pins import crossings, switch_positions
+from ..transcription.request import DriveSetup, Move
+from ...drive.transmission import BeltPulley
 
 
 def fine_grid_report(moves: list[Move], sols: list[MoveSolution], per_interval: int) -> tuple[dict, list[dict]]:
@@ -36,22 +35,6 @@ def fine_grid_report(moves: list[Move], sols: list[MoveSolution], per_interval: 
             worst = max(worst, viol)
         rows.append(row)
     return {"points_per_interval": per_interval, "worst_relative_violation": worst, "moves": rows}, rows
-
-
-def move_results(moves: list[Move], sols: list[MoveSolution], per_interval: int = 50) -> list[MoveResult]:
-    """Peaks of each move from its polynomials on a fine grid (exact polynomials, numpy)."""
-    out = []
-    for mv, sol in zip(moves, sols):
-        tau = fine_grid(sol.mesh, per_interval)
-        _, y1, y2, y3, _ = sol.evaluate(tau)
-        # the jerk is one-sided at the mesh joints: include the left side too
-        tn = np.arange(1, sol.mesh.intervals) * sol.mesh.h
-        y3_left = sol.evaluate(tn - 1e-9 * sol.mesh.h)[3] if len(tn) else np.zeros(0)
-        j_max = float(max(np.max(np.abs(y3)), np.max(np.abs(y3_left), initial=0.0)))
-        c_a = float(np.max(np.abs(y2)))
-        out.append(MoveResult(mv.index, mv.interval, mv.name, mv.t_start, mv.duration, mv.start, mv.stroke, sol,
-                              float(np.max(np.abs(y1))) * mv.v_scale, c_a * mv.a_scale, j_max * mv.j_scale, c_a))
-    return out
 
 
 def fine_cycle(problem, spm: float, moves: list[Move], sols: list[MoveSolution], per_interval: int,
@@ -87,7 +70,7 @@ def drive_checks_fine(drive: DriveSetup, motor, teeth: int | None, radius: float
     """The drive package's checks of the solution, on a fine grid over the whole cycle. A continuous radius
     has its belt rated as ``belt_teeth`` teeth (None: the fewest of the range); the problem's own
     transmission (a screw and lever) has no pulley and no belt."""
-    from ..drive.checks import drive_checks
+    from ...drive.checks import drive_checks
 
     switches = switch_positions(drive)
     t, s, v, a = fine_cycle(problem, spm, moves, sols, per_interval, switches)

@@ -12,11 +12,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from .limits import LimitGroup
-from .nlp import prepare
-from .request import SolveRequest
-from .solver import STATUS_OK, solve_nlp
-from ..errors import LimitError, SolverError
+from ..transcription.limits import LimitGroup
+from ..transcription.nlp import prepare
+from ..transcription.request import SolveRequest
+from ..transcription.solver import STATUS_OK, solve_nlp
+from ...errors import LimitError, SolverError
 
 
 def diagnose(req: SolveRequest, status: str) -> SolverError:

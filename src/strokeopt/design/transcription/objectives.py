@@ -16,7 +16,7 @@ from typing import Callable
 import casadi as ca
 import numpy as np
 
-from ..errors import ProblemError
+from ...errors import ProblemError
 
 #: Weight of the jerk-squared regularisation added to epigraph (peak) objectives.
 SMOOTHING = 1e-7

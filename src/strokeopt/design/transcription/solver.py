@@ -15,8 +15,8 @@ import numpy as np
 
 import casadi as ca
 
-from .._stdout import stdout_to
-from ..io.fields import did_you_mean
+from ..._stdout import stdout_to
+from ...io.fields import did_you_mean
 
 #: Default IPOPT options (plain dict, passed through to CasADi's nlpsol).
 DEFAULT_SOLVER_OPTIONS = {

@@ -178,7 +178,7 @@ class RmsTorque(Limit):
         # integral of torque squared over the move (Gauss-Legendre points), accumulated along the
         # move in a chain of variables, one link per mesh interval: a single sum over every node
         # would make one dense Jacobian row (costly to differentiate)
-        from ..drive.load import load_torque
+        from ...drive.load import load_torque
 
         dm, b, mesh, mv = g.drive_model, g.built, g.request.mesh, g.request.moves[k]
         if dm.rated is None and g.request.objective not in RMS_OBJECTIVES:  # a stepper: not a limit, not asked for

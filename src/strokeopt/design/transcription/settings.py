@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..drive.transmission import TEETH_RANGE
-from ..motion.timing import SPM_RANGE
+from ...drive.transmission import TEETH_RANGE
+from ...motion.timing import SPM_RANGE
 from .collocation import Mesh
 from .objectives import OBJECTIVES
 from .solver import check_solver_options

@@ -34,7 +34,7 @@ import casadi as ca
 import numpy as np
 from numpy.polynomial import Polynomial
 
-from ..motion.stroke import Piece
+from ...motion.stroke import Piece
 
 SCHEMES = ("radau",)
 

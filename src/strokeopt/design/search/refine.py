@@ -19,17 +19,17 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from .collocation import Mesh
+from ..transcription.collocation import Mesh
 from .diagnose import diagnose
 from .fine_grid import drive_checks_fine, fine_grid_report
-from .free import free_values
-from .limits import enforced_checks
-from .nlp import Nlp, prepare
-from .objectives import TIME_SCALE, free_time, needs_terms
-from .pins import pin_intervals, pin_times, pins_fit
-from .request import SolveRequest
-from .solver import STATUS_OK, solve_nlp
-from ..errors import LimitError, SolverError
+from ..transcription.free import free_values
+from ..transcription.limits import enforced_checks
+from ..transcription.nlp import Nlp, prepare
+from ..transcription.objectives import TIME_SCALE, free_time, needs_terms
+from ..transcription.pins import pin_intervals, pin_times, pins_fit
+from ..transcription.request import SolveRequest
+from ..transcription.solver import STATUS_OK, solve_nlp
+from ...errors import LimitError, SolverError
 
 #: Re-solves that move the pinned points at most, per mesh.
 PIN_ITERATIONS = 5
@@ -232,7 +232,7 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
         if drive is not None and found:  # the checks see the load with the free parameters found
             from copy import copy
 
-            from ..drive.spec import with_model_springs
+            from ...drive.spec import with_model_springs
 
             drive = copy(drive)
             drive.load = with_model_springs(drive.load, found)

@@ -128,7 +128,7 @@ def pin_motion(g, k: int, pos: float, first: int | None):
 def pin_rows(g, k: int, mv: Move, rotor, trans):
     """Torque and belt force (row vectors) on both sides of every pinned point the move passes
     (:func:`pin_motion`); a pin the move does not cross gets a zero weight."""
-    from ..drive.load import load_torque
+    from ...drive.load import load_torque
 
     taus, forces = [], []
     for k_, pos, first in g.pins:

@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..drive.spec import with_model_springs
-from ..errors import ProblemError
+from ...drive.spec import with_model_springs
+from ...errors import ProblemError
 
 FIELD = "design.free"
 

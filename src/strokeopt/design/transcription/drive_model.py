@@ -23,8 +23,8 @@ import numpy as np
 
 from .pins import pin_rows
 from .request import SolveRequest
-from ..drive.checks import is_stepper, torque_limit
-from ..drive.transmission import BeltPulley
+from ...drive.checks import is_stepper, torque_limit
+from ...drive.transmission import BeltPulley
 
 
 def pulley_setting(req: SolveRequest) -> tuple[float, float, float, float]:
@@ -165,7 +165,7 @@ class DriveModel:
 
     def move(self, g, k: int) -> None:
         """Torque (relative to ``tau_ref``) and belt force of move ``k``, with its pinned points."""
-        from ..drive.load import load_torque
+        from ...drive.load import load_torque
 
         mv = g.request.moves[k]
         # Torque (linear in the acceleration) is held at the Bernstein control points of the
@@ -200,7 +200,7 @@ class DriveModel:
 
     def dwells(self, g) -> None:
         """The dwells: at rest, torque from gravity and load forces only."""
-        from ..drive.load import load_torque
+        from ...drive.load import load_torque
 
         b, req = g.built, g.request
         sch = req.schedule

@@ -13,10 +13,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .settings import ContactSettings
-from ..contact.cluster import Cluster, build_cluster
-from ..contact.scene import default_scene
-from ..contact.simulate import drive_reference
-from ..errors import ProblemError
+from ...contact.cluster import Cluster, build_cluster
+from ...contact.scene import default_scene
+from ...contact.simulate import drive_reference
+from ...errors import ProblemError
 
 FIELD = "design.contact"
 

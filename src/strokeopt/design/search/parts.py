@@ -12,9 +12,9 @@ import math
 from dataclasses import replace
 
 from .refine import Outcome, solve_one
-from .objectives import needs_terms
-from .request import DriveChoice, SolveRequest
-from ..errors import LimitError, ProblemError, SolverError
+from ..transcription.objectives import needs_terms
+from ..transcription.request import DriveChoice, SolveRequest
+from ...errors import LimitError, ProblemError, SolverError
 
 
 def choose_parts(req: SolveRequest, progress=None):
@@ -99,7 +99,7 @@ def choose_parts(req: SolveRequest, progress=None):
 def nearest_teeth(req: SolveRequest, motor, cont: Outcome):
     """Re-solve with the tooth counts either side of the continuous optimum; keep the better."""
     drive = req.drive
-    from ..drive.transmission import PROFILE_PITCH
+    from ...drive.transmission import PROFILE_PITCH
 
     z = 2 * math.pi * cont.radius / PROFILE_PITCH[drive.profile]
     available = [p.teeth for p in drive.catalogue.pulleys_of(drive.profile, *drive.teeth_range)]
