@@ -1,27 +1,23 @@
 """strokeopt: design servo-driven reciprocating mechanisms ("electronic cams").
 
-The data flow, one package per step::
+The data flow, one package per step (floors in docs/architecture.md; imports point down only)::
 
-    problem file (TOML)
-      io/        -> Problem            read and checked field by field, SI units    problem.py, io/problem_file.py
-      motion/    -> TimingDiagram      dwells and moves on the cam circle           motion/timing.py
-                 -> StrokeFunction     s, v, a, jerk as CasADi Functions: a classic  motion/laws.py,
-                                       law or an optimised stroke                   motion/stroke.py
-      drive/     -> torque and checks  transmission + motor + load; catalogue       drive/transmission.py, load.py,
-                                       sizing, highest stitch rate                  checks.py, sizing.py
-      design/    -> Design             direct collocation of every move: optimal    design/request.py -> nlp.py ->
-                                       stroke, pulley and motor under one builder   limits.py, objectives.py ->
-                                       per limit; design.json (io/design_file.py)   solve.py -> result.py
-      contact/   -> SceneResult        the mechanism as data; a scene's CasADi ODE  contact/model.py, scene.py,
-                                       over one cycle (CVODES): impact, lag, gap N  simulate.py, verify.py
-      servo/     -> AccuracyResult     cascade loop and belt (python-control): the  servo/plant.py, loop.py,
-                                       handover error, the design's error term,     accuracy.py, kernel.py,
-                                       what accuracy costs in stitch rate           tradeoff.py
-      report/    -> text, JSON, figures                                             report/<area>.py
+    problem file (TOML, extends, --set)
+      files/      -> data              the file, its extends chain, the --set texts     files/problem_file.py
+      problem.py  -> Problem           checked field by field, SI units; variants in memory (with_overrides)
+      motion/     -> TimingDiagram, StrokeFunction   s, v, a, jerk as CasADi Functions: a law or a design
+      drive/      -> torque, checks    transmission + motor + load; catalogue; the resolved drive (selection)
+      contact/    -> SceneResult       the mechanism as data; a scene's CasADi ODE (CVODES)
+      servo/      -> AccuracyResult    cascade loop and belt: the handover error and the design's error term
+      linkage/    -> Linkage           planar linkages as data: structure, closure, kinematics, synthesis
+      design/     -> Design            direct collocation (transcription/) and its search (search/)
+      studies/    -> VerifiedDesign    solve_verified: the design, its servo simulation, its contact
+                                       verification, one status and verdict; sweeps, impact, trade-off
+      files/      -> design.json, cam tables (and back)
+      report/     -> text, JSON, figures, HTML (formats what it is given)
 
-The domain packages (io, motion, drive, design, contact, servo) return data and import
-neither ``report`` nor ``bench`` nor ``cli``; ``cli`` parses, calls the API and reports;
-``bench`` measures. Notebooks and tests use the public API exported here.
+``cli`` parses, calls one library function and reports; ``bench`` measures. Notebooks and tests use the
+public API exported here: ``solve_verified`` gives the same answer as ``strokeopt solve``.
 """
 
 from .drive.catalogue import Belt, Catalogue, Pulley, ServoMotor, load_catalogue
