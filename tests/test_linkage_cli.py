@@ -94,3 +94,67 @@ def test_transmission_limit_exit_1(capsys):
     # the blind-stitch reconstruction's needle dyad falls to sin(4.7 deg) = 0.082 (digest D reconstruction)
     assert main(["linkage", str(BLIND), "--set", "transmission.min_transmission_index=0.1", "--plot", "none"]) == 1
     assert "below the limit 0.1" in capsys.readouterr().err
+
+
+PARALLELOGRAM = """
+[problem]
+name = "parallelogram four-bar"
+[machine]
+rpm = 100
+[transmission]
+type = "linkage"
+reference_angle_deg = 90.0
+[transmission.crank]
+link = "crank"
+pivot = "O2"
+[[transmission.joints]]
+name = "O2"
+x_mm = 0.0
+y_mm = 0.0
+ground = true
+[[transmission.joints]]
+name = "A"
+x_mm = 0.0
+y_mm = 10.0
+[[transmission.joints]]
+name = "B"
+x_mm = 100.0
+y_mm = 10.0
+[[transmission.joints]]
+name = "O4"
+x_mm = 100.0
+y_mm = 0.0
+ground = true
+[[transmission.links]]
+name = "crank"
+joints = ["O2", "A"]
+[[transmission.links]]
+name = "coupler"
+joints = ["A", "B"]
+[[transmission.links]]
+name = "follower"
+joints = ["O4", "B"]
+[[transmission.outputs]]
+name = "follower"
+kind = "angle"
+joint = "B"
+about = "O4"
+"""
+
+
+def test_a_toggle_inside_the_cycle_is_refused(capsys, tmp_path):
+    # a parallelogram four-bar (a Grashof change point) turns through two dead centres, at 0 and 180 deg,
+    # where coupler and follower are collinear: refused with the angle
+    err = _one_line_error(capsys, ["linkage", _variant(tmp_path, PARALLELOGRAM)], "transmission.links[2]",
+                          angle=True)
+    assert "dead centre (toggle) at input angle 0.00 deg" in err or "180.00 deg" in err
+
+
+def test_synthesize_needs_a_synthesis_section(capsys, tmp_path):
+    _one_line_error(capsys, ["linkage", _variant(tmp_path, PARALLELOGRAM), "--synthesize"], "synthesis",
+                    angle=False)
+
+
+def test_synthesis_section_is_checked_at_load(capsys, tmp_path):
+    text = BLIND.read_text().replace("rms_max_m_s = 0.06", "rms_max_m_s = 0.06\nrms_maximum = 1")
+    _one_line_error(capsys, ["linkage", _variant(tmp_path, text)], "synthesis.rms_maximum", angle=False)

@@ -93,9 +93,9 @@ def _synthesize(args) -> int:
 
         raise ProblemError(args.problem, "synthesis", "--synthesize needs a [synthesis] section (targets, bounds)")
     result = synthesize(problem, starts=args.starts, seed=args.seed)
-    report = result.to_dict(Kinematics(problem.linkage))
     rms_max = float(problem.synthesis.get("rms_max_m_s", math.inf))
-    report["status"] = "ok" if report["best"]["rms_m_s"] <= rms_max else "targets missed"
+    report = result.to_dict(Kinematics(problem.linkage))
+    report = {"status": "ok" if report["best"]["rms_m_s"] <= rms_max else "targets missed", **report}
     problem.linkage = problem.linkage.with_reference(result.best.coords)
     summary = summarize(problem)
     report["analysis"] = summary

@@ -71,6 +71,10 @@ def load_linkage_file(path, overrides: list[str] | None = None, check_cycle: boo
         synth._read.update(synth.data)   # synthesis.py validates its own section
     top.finish()
     problem = LinkageProblem(file, name, description, linkage, rpm, *limits, synthesis)
+    if synth is not None:   # checked now (names, ranges, misspelt keys), used by --synthesize
+        from .targets import read_spec
+
+        read_spec(problem, Fields(dict(synthesis), file, "synthesis", overridden))
     if check_cycle:
         from .kinematics import kinematics_of
 
