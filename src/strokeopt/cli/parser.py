@@ -49,6 +49,19 @@ def _stroke_options(p: argparse.ArgumentParser, sweep: bool = False, law: bool =
         p.add_argument("--chi", type=float, help="shape parameter chi of the modified sine law (0.001 <= chi <= 0.25)")
 
 
+def _study_runner_options(p: argparse.ArgumentParser, study: str) -> None:
+    """--workers and --scheduler: where a study's tasks run (studies/runner.py)."""
+    p.add_argument("--workers", metavar="N",
+                   help=f"worker processes for {study}, 1 to 256: 1 solves in this process one after the other (the "
+                        "reference answer); N > 1 starts a Dask LocalCluster of N processes, each solving a "
+                        "contiguous run of the points warm-started within the run (default: one per core, or "
+                        "$STROKEOPT_SCHEDULER when set)")
+    p.add_argument("--scheduler", metavar="tcp://HOST:PORT",
+                   help=f"run {study} on the workers of this Dask scheduler (each with strokeopt installed, started "
+                        "with 'dask worker tcp://HOST:PORT --nthreads 1'); the same as setting STROKEOPT_SCHEDULER. "
+                        "An unreachable scheduler is an error before any solve")
+
+
 def _plot_option(p: argparse.ArgumentParser, name: str) -> None:
     p.add_argument("--plot", metavar="FILE",
                    help=f"figure file (default {DEFAULT_OUT}/<problem>_{name}.png, named by what distinguishes the "
@@ -180,6 +193,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--impact-range", metavar="MIN:MAX[:POINTS]",
                    help="with --study impact: impact-velocity limits in m/s, POINTS (default 8, at most 20) evenly "
                         "from MIN to MAX, e.g. 1.6:2.9:8")
+    _study_runner_options(p, "a sweep (--spm START:STOP:STEP) or --study impact")
     _plot_option(p, "solve_<spm>spm_<objective>")
     p.set_defaults(run=cmd_solve)
 

@@ -57,6 +57,12 @@ def cmd_solve(args) -> int:
 
         sweep = parse_spm_range(args.spm)
         args.spm = None
+    if (args.workers is not None or args.scheduler is not None) and sweep is None and args.study != "impact":
+        option = "--workers" if args.workers is not None else "--scheduler"
+        raise ProblemError(option, "", "is for a sweep (--spm START:STOP:STEP) or --study impact: a single solve "
+                                       "runs in this process")
+    if sweep is not None or args.study == "impact":
+        _runner(args)  # --workers, --scheduler checked before any work
     if args.objective is not None and args.objective not in OBJECTIVES:
         raise ProblemError("--objective", "", f"{args.objective!r} is not one of {', '.join(OBJECTIVES)}")
     problem = _load(args, fix_in_design=True)  # (an unwritable --out was refused before: cli.common.check_outputs)
@@ -82,8 +88,9 @@ def cmd_solve(args) -> int:
     if args.impact_range is not None:
         raise ProblemError("--impact-range", "", "is for --study impact")
     if sweep is not None:
-        rows = sweep_design(problem, sweep, objective=args.objective,
-                         progress=progress and (lambda it: progress(it, "spm")))
+        runner = _runner(args, len(sweep))
+        rows = sweep_design(problem, sweep, objective=args.objective, runner=runner,
+                            progress=progress and (lambda it: progress(it, "spm")))
         best = fastest_feasible(rows)
         at_end = best is not None and all(r["feasible"] for r in rows)  # the sweep found no limit
         if args.json:
@@ -95,12 +102,14 @@ def cmd_solve(args) -> int:
                                       ("motor", "motor"), ("pulley_teeth", "z"), ("peak_torque_N_m", "peak N m"),
                                       ("rms_torque_N_m", "RMS N m"), ("solve_time_s", "solve time s"),
                                       ("reason", "why not")],
-                               title=f"{problem.name}: optimal design over the stitch rate (warm-started)"))
+                               title=f"{problem.name}: optimal design over the stitch rate ({_chained(runner)})"))
             print("\nno feasible stitch rate in the sweep" if best is None else
                   f"\nfastest feasible stitch rate: >= {best:g} spm (the end of the sweep; every rate was feasible)"
                   if at_end else f"\nfastest feasible stitch rate: {best:g} spm")
         _write_figure(lambda p: plot_design_sweep(rows, p, _objective(args, problem)),
                       _plot_path(args, "solve_sweep", spm_tag(sweep), _objective(args, problem)), args)
+        if _report_failed_tasks(rows, "spm", "spm"):
+            return 1
         if best is None:
             print("strokeopt: infeasible: no stitch rate of the sweep meets every limit (column 'why not')",
                   file=sys.stderr)
@@ -173,7 +182,7 @@ def _impact_study(args, problem, progress) -> int:
     from ..report.format import to_json
 
     velocities = _impact_range(args.impact_range)
-    rows = impact_study(problem, velocities, objective=args.objective,
+    rows = impact_study(problem, velocities, objective=args.objective, runner=_runner(args, len(velocities)),
                         progress=progress and (lambda it: progress(it, "limit")))
     good = [r for r in rows if r["feasible"] and r.get("verified") is not False]
     objective = _objective(args, problem)
@@ -185,7 +194,35 @@ def _impact_study(args, problem, progress) -> int:
         print(impact_study_text(report))
     _write_figure(lambda p: plot_impact_study(rows, p, objective, f"{problem.name}, {problem.spm:g} spm"),
                   _plot_path(args, "solve_impact", spm_tag(problem.spm), objective), args)
+    if _report_failed_tasks(rows, "impact_velocity_max_m_s", "m/s impact-velocity limit"):
+        return 1
     if not good:
         print("strokeopt: infeasible: no impact-velocity limit of the study gives a verified design", file=sys.stderr)
         return 1
     return 0
+
+
+def _runner(args, tasks: int | None = None):
+    """Where a study's tasks run: --workers, --scheduler, else $STROKEOPT_SCHEDULER, else one process per core
+    (studies/runner.py; checked like a file's fields)."""
+    from ..studies.runner import study_runner
+
+    return study_runner(args.workers, args.scheduler, tasks=tasks)
+
+
+def _chained(runner) -> str:
+    """How a study's points were warm-started, for its title."""
+    if runner.in_process:
+        return "warm-started, in this process"
+    return f"warm-started within each worker's run of rates, on {runner.describe()}"
+
+
+def _report_failed_tasks(rows: list[dict], key: str, unit: str) -> bool:
+    """One line on stderr per point whose task failed or was lost (an error, not an infeasible design), with
+    its input; the other points' rows were reported. True when there was one."""
+    from ..studies.sweeps import failed_tasks
+
+    failed = failed_tasks(rows)
+    for r in failed:
+        print(f"strokeopt: failed: the task of {r[key]:g} {unit}: {r['reason']}", file=sys.stderr)
+    return bool(failed)
