@@ -8,7 +8,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from strokeopt.linkage import kinematics_of
+from strokeopt.linkage.kinematics import kinematics_of
 from strokeopt.linkage.dynamics import analyse_dynamics, load_magnitude
 from strokeopt.linkage.files import KGF_CM_S2, load_linkage_file
 

@@ -11,7 +11,7 @@ import pytest
 from scipy.optimize import fsolve
 
 from strokeopt.errors import ProblemError
-from strokeopt.linkage import kinematics_of
+from strokeopt.linkage.kinematics import kinematics_of
 from strokeopt.linkage.files import load_linkage_file
 
 from conftest import ROOT

@@ -9,7 +9,7 @@ import time
 import numpy as np
 import pytest
 
-from strokeopt.linkage import Kinematics, kinematics_of
+from strokeopt.linkage.kinematics import Kinematics, kinematics_of
 from strokeopt.linkage.files import load_linkage_file
 from strokeopt.linkage.synthesis import synthesize
 

@@ -65,7 +65,7 @@ def cmd_linkage(args) -> int:
 
 
 def _figure(args, problem, summary, command: str, linkage=None) -> None:
-    from ..linkage import kinematics_of
+    from ..linkage.kinematics import kinematics_of
     from ..report.linkage import plot_linkage
 
     lk = linkage or problem.linkage
@@ -80,7 +80,7 @@ def _figure(args, problem, summary, command: str, linkage=None) -> None:
 
 
 def _synthesize(args) -> int:
-    from ..linkage import Kinematics
+    from ..linkage.kinematics import Kinematics
     from ..linkage.files import load_linkage_file
     from ..linkage.summary import summarize
     from ..linkage.synthesis import synthesize

@@ -1,19 +1,13 @@
-"""Planar linkages as transmissions: data (model.py), structure (structure.py), closure and exact
-kinematics (closure.py, kinematics.py), dynamics (dynamics.py), synthesis (synthesis.py) and the
-linkage problem file (files.py).
+"""Planar linkages as transmissions: a crank-driven linkage as data, solved exactly, its crank torque and
+its dimensions fitted to a table. Modules in data-flow order:
 
-    problem file [transmission] type = "linkage"
-        -> Linkage            joints at a reference pose, links, crank, outputs, masses
-        -> Structure          mobility, loops, Grashof four-bars, groups solved together
-        -> Kinematics.solve   Newton continuation over the input, derivatives by AD
-        -> dynamics           reduced inertia, power-balance torque, Newton-Euler reactions
-        -> summary            what the command reports; synthesis.py fits a geometry to a table
+* model.py      ``Linkage``: joints at a reference pose, links (masses), the crank, outputs, process loads
+* structure.py  ``analyse_structure``: Gruebler mobility, loops, Grashof four-bars, groups solved together
+* closure.py    loop closure as CasADi SX from the data; Newton steps; derivatives by AD (Taylor mode)
+* kinematics.py ``Kinematics.solve``: Newton continuation over the input angle, branch kept, refusals
+* dynamics.py   reduced inertia, power-balance crank torque, Newton-Euler joint reactions
+* files.py      ``load_linkage_file`` -> ``LinkageProblem`` (``[transmission] type = "linkage"``)
+* targets.py    the ``[synthesis]`` section and the fit of a solved linkage against it
+* synthesis.py  ``synthesize``: dimensional synthesis in the simultaneous form (IPOPT)
+* summary.py    ``summarize``: what ``strokeopt linkage`` reports
 """
-
-from .model import Crank, Joint, Link, Linkage, Load, Output
-from .structure import Structure, analyse_structure
-from .kinematics import Cycle, Kinematics, kinematics_of
-from .files import LinkageProblem, load_linkage_file
-
-__all__ = ["Crank", "Cycle", "Joint", "Kinematics", "Link", "Linkage", "LinkageProblem", "Load", "Output",
-           "Structure", "analyse_structure", "kinematics_of", "load_linkage_file"]
