@@ -35,6 +35,7 @@ def test_linkage_json_and_figure(capsys, tmp_path):
 
 
 def test_linkage_text(capsys):
+    # digest D: n = 3*5 - 2*7 = 1, two loop closure equations; the text names Alt's angle of each dyad
     assert main(["linkage", str(BLIND), "--plot", "none"]) == 0
     text = capsys.readouterr().out
     assert "mobility 1, 6 links (with the ground), 7 revolute joints, 2 independent loops" in text
@@ -58,11 +59,13 @@ def _one_line_error(capsys, argv, field: str, angle: bool):
     ("transmission.joints[7].x_mm=-20", "transmission.links[4]"),
 ])
 def test_geometry_that_cannot_turn_is_refused_naming_the_angle(capsys, override, field):
+    # issue 24 acceptance (bad geometry): one line naming the file, the field and the angle, exit 2
     err = _one_line_error(capsys, ["linkage", str(BLIND), "--set", override, "--plot", "none"], field, angle=True)
     assert "dead centre" in err
 
 
 def test_a_link_too_short_in_the_loom(capsys):
+    # issue 24 acceptance (a link too short to close), on the triad of digest C
     # the sley shaft B0 moved 60 mm towards the coupler: the sley cannot reach D over the whole turn
     err = _one_line_error(capsys, ["linkage", str(LOOM), "--set", "transmission.joints[7].y_mm=-40", "--plot", "none"],
                           "transmission.links[2]", angle=True)
@@ -76,6 +79,7 @@ def _variant(tmp_path, text: str) -> str:
 
 
 def test_structural_errors_are_refused(capsys, tmp_path):
+    # issue 24 acceptance: a joint named twice, a link naming an unknown joint, a mobility other than 1
     text = BLIND.read_text()
     twice = text.replace('name = "C"                    # second arm', 'name = "B"                    # second arm')
     _one_line_error(capsys, ["linkage", _variant(tmp_path, twice)], "transmission.joints[5].name", angle=False)
@@ -151,10 +155,12 @@ def test_a_toggle_inside_the_cycle_is_refused(capsys, tmp_path):
 
 
 def test_synthesize_needs_a_synthesis_section(capsys, tmp_path):
+    # README: bad input ends with one line naming the file and the field, exit 2
     _one_line_error(capsys, ["linkage", _variant(tmp_path, PARALLELOGRAM), "--synthesize"], "synthesis",
                     angle=False)
 
 
 def test_synthesis_section_is_checked_at_load(capsys, tmp_path):
+    # README: misspelt keys are errors (here in [synthesis], refused before any work)
     text = BLIND.read_text().replace("rms_max_m_s = 0.06", "rms_max_m_s = 0.06\nrms_maximum = 1")
     _one_line_error(capsys, ["linkage", _variant(tmp_path, text)], "synthesis.rms_maximum", angle=False)

@@ -77,6 +77,7 @@ def test_power_balance_equals_newton_euler_with_the_beat_up(loom):
 
 
 def test_power_balance_equals_newton_euler_without_the_beat_up(loom):
+    # issue 24 acceptance: the same without the beat-up window (digest C's sley inertia and gravity only)
     lk = dataclasses.replace(loom.linkage, loads=())
     kin = kinematics_of(lk)
     cycle = kin.solve(720)

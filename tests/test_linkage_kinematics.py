@@ -107,6 +107,8 @@ def test_ad_derivatives_against_central_differences(solved):
 
 
 def test_output_derivatives_against_central_differences(solved):
+    # issue 24 acceptance (AD against central differences, h = 1e-4 rad, 1e-5 relative) for the outputs
+    # (digest C's v_D of point D, digest D's needle-point speed)
     problem, kin, cycle = solved
     name = problem.linkage.outputs[0].name
     y = kin.output(cycle, name)
