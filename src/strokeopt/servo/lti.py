@@ -10,7 +10,7 @@ The loop (:mod:`.loop`) is a continuous-time state space; this module gives it
   scipy's ``lsim``), several sets of inputs at once;
 * :func:`periodic_steady_state`: the periodic response to periodic inputs (the state at the cycle
   start solves ``x0 = Phi x0 + x_forced(T)``);
-* :func:`expm` (Padé approximation with scaling and squaring) and :func:`stability_margins` of a
+* :func:`expm` (balanced, then a Padé approximation with scaling and squaring) and :func:`stability_margins` of a
   loop transfer function ``num(s)/den(s)`` (its crossings found as polynomial roots, the method of
   python-control's ``stability_margins``).
 
@@ -310,7 +310,9 @@ def stability_margins(num, den) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     w180 = positive_roots(np.polysub(np.polymul(num_iw.imag, den_iw.real), np.polymul(num_iw.real, den_iw.imag)),
                           strict=False)
     r180 = loop(w180)
-    r180 = r180[r180 <= 0.0]  # numpy orders complex numbers by their real part first, as python-control does
+    # on the negative real axis: python-control keeps ``r180 <= 0`` in numpy's order of complex numbers (the
+    # real part first, then the imaginary part), stated here without relying on that order
+    r180 = r180[(r180.real < 0.0) | ((r180.real == 0.0) & (r180.imag <= 0.0))]
     # phase margin: |L| = 1
     wc = positive_roots(np.polysub(_poly_iw_sqr(num_iw), _poly_iw_sqr(den_iw)), strict=True)
     # modulus margin: the minima of |1 + L|^2 = |num + den|^2 / |den|^2
