@@ -264,6 +264,11 @@ def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagra
     return TimingDiagram(tuple(intervals), revs, times)
 
 
+#: Lead angle plus the flanks' friction angle of a screw the motor turns [deg]: at 90 deg the torque
+#: F d2/2 tan(lambda + rho') has no finite value (beyond it, it changes sign): no drive moves the nut.
+SCREW_ANGLE_MAX_DEG = 90.0
+
+
 def _optional_mm(f: Fields, key: str, lo: float, hi: float) -> float | None:
     value = f.number(key, None, min=lo, max=hi)
     return None if value is None else value * 1e-3
@@ -291,6 +296,15 @@ def _read_transmission(trans: Fields, timing: TimingDiagram) -> Transmission:
                     _optional_mm(trans, "screw_diameter_mm", 1.0, 100.0),
                     trans.number("thread_friction", 0.15, min=0.01, max=1.0),
                     math.radians(trans.number("thread_angle_deg", 30.0, min=0.0, max=90.0)))
+    if tr.screw_diameter is not None:  # a screw the motor cannot drive: F d2/2 tan(lambda + rho') turns over
+        lam = math.degrees(math.atan(tr.lead / (math.pi * tr.screw_diameter)))
+        rho = math.degrees(math.atan(tr.thread_friction / math.cos(tr.thread_angle / 2)))
+        if lam + rho >= SCREW_ANGLE_MAX_DEG:
+            raise trans.error("lead_mm", f"{tr.lead * 1e3:g} mm on a {tr.screw_diameter * 1e3:g} mm screw is a lead "
+                                         f"angle of {lam:.1f} deg; with the flanks' friction angle {rho:.1f} deg "
+                                         f"(thread_friction {tr.thread_friction:g}) they add to {lam + rho:.1f} deg, at "
+                                         f"or above {SCREW_ANGLE_MAX_DEG:g} deg: no torque drives the nut (a shorter "
+                                         "lead, a larger diameter or less friction)")
     positions = [p for i in timing.intervals for p in (i.start_position, i.end_position)]
     why = tr.range_error(min(positions), max(positions))
     if why is not None:

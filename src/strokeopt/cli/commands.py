@@ -138,7 +138,8 @@ def cmd_accuracy(args) -> int:
 def cmd_tradeoff(args) -> int:
     from ..report.format import to_json
     from ..report.servo import plot_tradeoff, tradeoff_text
-    from ..studies.tradeoff import tradeoff
+    from ..design.transcription.settings import ACCURACY_RANGE_MM
+    from ..studies.tradeoff import RESOLUTION_RANGE_SPM, tradeoff
 
     problem = _load(args)
     accuracies = None
@@ -147,10 +148,14 @@ def cmd_tradeoff(args) -> int:
             accuracies = [float(x) * 1e-3 for x in args.accuracies.split(",")]
         except ValueError:
             raise ProblemError("--accuracies", "", f"expected comma-separated millimetres, got {args.accuracies!r}") from None
-        if not all(a > 0 and a != float("inf") for a in accuracies):
-            raise ProblemError("--accuracies", "", f"every accuracy must be positive, got {args.accuracies!r}")
-    if not args.resolution > 0:
-        raise ProblemError("--resolution", "", f"must be positive, got {args.resolution!r}")
+        lo, hi = ACCURACY_RANGE_MM
+        if not all(lo * 1e-3 <= a <= hi * 1e-3 for a in accuracies):
+            raise ProblemError("--accuracies", "", f"every accuracy must lie in [{lo:g}, {hi:g}] mm, the range of "
+                                                   f"[design] handover_accuracy_mm, got {args.accuracies!r}")
+    lo, hi = RESOLUTION_RANGE_SPM
+    if not lo <= args.resolution <= hi:
+        raise ProblemError("--resolution", "", f"must lie in [{lo:g}, {hi:g}] spm (finer than the rate settles to, "
+                                               f"or coarser than the search's span), got {args.resolution!r}")
     def progress(step: str, text: str) -> None:  # a line per step on stderr (stdout: the table or the JSON)
         print(f"tradeoff {step}: {text}", file=sys.stderr, flush=True)
 

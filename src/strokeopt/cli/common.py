@@ -160,6 +160,10 @@ def _load(args, fix_in_design: bool = False):
         if chi is not None:
             params["chi"] = chi
         problem = problem.with_law(make_law(name, where=("command line", "--law/--chi"), **params))
+    if getattr(args, "design_data", None) is not None:  # a design of another problem is refused here
+        from ..files.design_file import check_design_fits
+
+        check_design_fits(args.design_data, problem, str(args.design))
     return problem
 
 

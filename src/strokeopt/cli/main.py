@@ -47,8 +47,25 @@ def command_parser(parser: argparse.ArgumentParser, command: str) -> argparse.Ar
     return subs.choices[command]
 
 
+def _json_argument_errors(parser: argparse.ArgumentParser, argv: list[str]) -> None:
+    """With --json, an argument error (a missing argument, a value argparse cannot read) also prints the JSON
+    failure object every other failure prints, so a script reads one shape: ``{"status": "bad input", ...}``."""
+    if "--json" not in argv:
+        return
+    subs = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    for p in (parser, *subs.choices.values()):
+        def error(message: str, p=p):
+            p.print_usage(sys.stderr)
+            print(f"{p.prog}: error: {message}", file=sys.stderr)
+            _emit(to_json({"status": "bad input", "message": message}))
+            sys.exit(2)
+
+        p.error = error
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
+    _json_argument_errors(parser, list(sys.argv[1:] if argv is None else argv))
     args, extra = parser.parse_known_args(argv)
     if extra:  # said by the command's own parser: its usage, not the top level's
         command_parser(parser, args.command).error(f"unrecognized arguments: {' '.join(extra)}")

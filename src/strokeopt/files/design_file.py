@@ -169,7 +169,8 @@ def design_json(design, resolution_deg: float = 0.1, spec: CamTableSpec | None =
     (its ``comparison`` with the classic laws and the ``drive`` it used), stored as they are."""
     spec = spec or CamTableSpec(resolution_deg)
     sch = design.problem.timing.schedule(design.spm)
-    out = {"format": "strokeopt-design", "schema_version": SCHEMA_VERSION, **design.summary(), **(extra or {})}
+    out = {"format": "strokeopt-design", "schema_version": SCHEMA_VERSION, **design.summary(),
+           "transmission": design.problem.transmission.name, **(extra or {})}
     out["moves"] = [{**m.to_dict(), "unit_solution": {"S": m.solution.S.tolist(), "V": m.solution.V.tolist(),
                                                       "A": m.solution.A.tolist()}} for m in design.moves]
     out["intervals"] = [{"index": itv.index, "name": itv.name, "kind": "move" if itv.is_move else "dwell",
@@ -372,7 +373,49 @@ def load_design(path, problem_file=None, overrides=()) -> DesignStroke:
     data, stroke = read_design(path)
     file = design_problem_file(path, data, problem_file)
     problem = load_problem(file, [*design_overrides(data), *overrides, f"machine.spm={float(data['spm'])!r}"])
+    check_design_fits(data, problem, str(path))
     return DesignStroke(problem, stroke, problem.spm, str(path), data.get("objective"))
+
+
+def check_design_fits(data: dict, problem, file: str) -> None:
+    """A design is refused on a problem it was not solved for: another transmission, or a timing whose
+    intervals (kind, start position, duration at the design's rate) differ from the design's -- its stroke
+    would be read on the wrong machine. Names the first difference."""
+    kind = data.get("transmission")
+    if kind is not None and kind != problem.transmission.name:
+        raise ProblemError(file, "transmission", f"the design was solved for a {kind} transmission; "
+                                                 f"{problem.file} has a {problem.transmission.name}: a design of "
+                                                 "another problem")
+    rows = data.get("intervals", [])
+    sch = problem.timing.schedule(float(data["spm"]))
+    if len(rows) != len(problem.timing.intervals):
+        raise ProblemError(file, "intervals", f"the design has {len(rows)} intervals, {problem.file} has "
+                                              f"{len(problem.timing.intervals)}: a design of another problem")
+    for row, itv, dur in zip(rows, problem.timing.intervals, sch.duration):
+        where = f"intervals[{itv.index}]"
+        if row["kind"] != ("move" if itv.is_move else "dwell"):
+            raise ProblemError(file, where, f"is a {row['kind']} in the design, a {'move' if itv.is_move else 'dwell'} "
+                                            f"in {problem.file}: a design of another problem")
+        if abs(row["position_mm"] - itv.start_position * 1e3) > POSITION_TOLERANCE_MM:
+            raise ProblemError(file, where, f"starts at {row['position_mm']:g} mm in the design, at "
+                                            f"{itv.start_position * 1e3:g} mm in {problem.file}: a design of another "
+                                            "problem (or of an edited stroke: solve it again)")
+        move = next((m for m in data.get("moves", []) if m.get("interval") == itv.index), None)
+        if itv.is_move and move is not None and "direction" in move:
+            stroke = (1 if move["direction"] == "up" else -1) * move["stroke_mm"] * 1e-3
+            if abs(stroke - itv.stroke) > POSITION_TOLERANCE_MM * 1e-3:
+                raise ProblemError(file, f"moves[{move.get('index')}]", f"moves {move['stroke_mm']:g} mm "
+                                   f"{move['direction']} in the design, {abs(itv.stroke) * 1e3:g} mm "
+                                   f"{'up' if itv.stroke > 0 else 'down'} in {problem.file}: the stroke does not "
+                                   "join its dwells (solve it again)")
+        if abs(row["duration_s"] - dur) > 1e-9 * max(1.0, dur):
+            raise ProblemError(file, where, f"lasts {row['duration_s'] * 1e3:.6g} ms in the design, "
+                                            f"{dur * 1e3:.6g} ms in {problem.file} at {data['spm']:g} spm: a design "
+                                            "of another timing (solve it again)")
+
+
+#: How far a design's interval position may lie from its problem's [mm] (a number written and read back).
+POSITION_TOLERANCE_MM = 1e-6
 
 
 def design_problem_file(path, data: dict, problem_file=None) -> Path:

@@ -91,6 +91,11 @@ class DesignSettings:
         return Mesh(self.mesh_intervals, self.collocation_degree)
 
 
+#: Handover accuracies a design may ask for [mm]: 0.1 um (below any encoder count of a sewing machine's
+#: axis) to 100 mm (no accuracy at all); ``[design] handover_accuracy_mm`` and ``tradeoff --accuracies``.
+ACCURACY_RANGE_MM = (1e-4, 100.0)
+
+
 def parse_design(f, *, file: str = "") -> DesignSettings:
     """Read the ``[design]`` table with the :class:`~strokeopt.problem.Fields` reader (unknown keys are errors)."""
     if f is None:
@@ -119,7 +124,7 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
     if objective == "min_snap" and d < 2:
         raise f.error("collocation_degree", "min_snap needs collocation_degree >= 2 (snap of the acceleration polynomial)")
     # 0.1 um (an encoder count of a fine drive) to 100 mm (no constraint on any textile mechanism)
-    accuracy = f.number("handover_accuracy_mm", 0.5, min=1e-4, max=100.0) * 1e-3
+    accuracy = f.number("handover_accuracy_mm", 0.5, min=ACCURACY_RANGE_MM[0], max=ACCURACY_RANGE_MM[1]) * 1e-3
     motor_choice = f.string("motor_choice", "fixed", choices=MOTOR_CHOICES)
     pulley = f.string("pulley", "fixed", choices=PULLEY_CHOICES)
     zmin = f.number("pulley_teeth_min", None, integer=True, min=TEETH_RANGE[0], max=TEETH_RANGE[1])  # see
