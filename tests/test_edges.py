@@ -87,3 +87,10 @@ def test_a_stroke_that_does_not_join_up_is_refused(capsys, knitting_design, tmp_
     bad.write_text(json.dumps(data), encoding="utf-8")
     line = _one_line(capsys, ["verify", str(bad), "--plot", "none"])
     assert field in line and words in line
+
+
+def test_report_of_a_design_file_refuses_an_objective(capsys, knitting_design, tmp_path):
+    # before: --objective was ignored without a word
+    line = _one_line(capsys, ["report", str(KNITTING), "--design", str(knitting_design), "--objective",
+                              "min_peak_torque", "--out", str(tmp_path / "r.html")])
+    assert "--objective" in line and "omit one of them" in line

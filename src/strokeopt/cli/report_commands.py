@@ -61,6 +61,9 @@ def cmd_report(args) -> int:
     from ..report.format import to_json
 
     out = _html_path(args.html)
+    if args.design is not None and args.objective is not None:  # it would be ignored: say so instead
+        raise ProblemError("--objective", "", f"a design read from --design {args.design} was solved for its own "
+                                              "objective; --objective is for a report that solves (omit one of them)")
     problem = _load(args, fix_in_design=True)
     scenes = _scenes(args, problem)
     args.sim_options = _sim_options(args)
