@@ -21,7 +21,7 @@ import casadi as ca
 from .model import Linkage
 from .structure import Structure
 
-NEWTON_STEPS = 5      # unrolled Newton iterations per continuation step
+NEWTON_STEPS = 3      # unrolled Newton iterations per continuation step
 
 
 def cross(a, b):
