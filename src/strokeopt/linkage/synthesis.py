@@ -28,7 +28,7 @@ from ..errors import ProblemError
 from ..io.fields import Fields
 from .closure import cross, rotate
 from .kinematics import Kinematics, kinematics_of
-from .targets import SynthesisSpec, _Stub, fit_report, read_spec
+from .targets import SynthesisSpec, fit_report, poses_only, read_spec
 
 
 @dataclass
@@ -256,7 +256,7 @@ class _Nlp:
         QD = np.array([qd[pick(t)] for t in self.nodes]).T
         parts = [coords, Q[:, 1:].T.ravel(), QD.T.ravel()]
         if xshape[1]:
-            y = kin.output(_Stub(kin, grid, q, qd), spec.swing_output)[0]
+            y = kin.output(poses_only(kin, grid, q, qd), spec.swing_output)[0]
             cols = []
             for k in (int(np.argmin(y)), int(np.argmax(y))):
                 cols.append(np.concatenate([q[k], qd[k], [grid[k]]]))

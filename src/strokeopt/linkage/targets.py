@@ -90,7 +90,7 @@ class SynthesisSpec:
         if worst < 1e-3:
             return None
         short = max(0.0, self.index_min - worst) / max(self.index_min, 1e-9)   # below the limit: IPOPT may mend it
-        stub = _Stub(kin, grid, q, dq)
+        stub = poses_only(kin, grid, q, dq)
         y = kin.output(stub, self.output)
         at = [int(round(((t - grid[0]) % (2 * math.pi)) / (2 * math.pi / n))) % n for t in self.angles]
         rms = math.sqrt(np.mean((y[1, at] * problem.omega - self.speeds) ** 2))
@@ -101,7 +101,8 @@ class SynthesisSpec:
         return rms * (1 + abs(swing - self.swing) / self.swing) * (1 + short)
 
 
-def _Stub(kin, grid, q, dq) -> Cycle:
+def poses_only(kin, grid, q, dq) -> Cycle:
+    """A Cycle of poses and first derivatives only (higher ones zero): enough for an output's value and speed."""
     zero = np.zeros_like(q)
     return Cycle(kin.linkage, kin.structure, grid, q, dq, zero, zero, np.zeros(len(q)), np.zeros((len(q), 0)), 0.0,
                  len(q))
