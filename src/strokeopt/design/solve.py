@@ -93,7 +93,7 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     resolved = None if drive is None else resolve_drive(  # the parts chosen, resolved once and handed on
         problem, motor=motor, pulley_teeth=teeth, pitch_diameter=pd, include_pulley_inertia=settings.include_pulley_inertia)
     checks, active = _report_checks(best)
-    design = Design(problem, spm, req.objective, best.value, nlp.graph.unit, stroke, moves, nlp.request.mesh,
+    design = Design(problem, spm, req.objective, best.value, nlp.graph.cost.unit, stroke, moves, nlp.request.mesh,
                     best.status, wall, best.iterations, checks=checks, active_constraints=active, fine_grid=best.fine,
                     pulley_teeth=teeth, pitch_diameter=pd, motor=None if motor is None else motor.name,
                     notes=notes + _settings_notes(settings, free, nlp, drive), drive=resolved, settings=settings,

@@ -76,7 +76,7 @@ class Outcome:
 
 def objective_value(nlp: Nlp, sol, x) -> float:
     """The objective without the smoothing term (scaled)."""
-    expr = nlp.graph.objective_expr
+    expr = nlp.graph.cost.measure
     return float(sol["f"]) if expr is None else float(nlp.value(expr, x).item())
 
 
@@ -178,7 +178,7 @@ def solve_free_time(req: SolveRequest) -> Outcome:
     offset, _ = final.built.offsets[TIME_SCALE]
     x[offset] = 1.0
     out = replace(out, nlp=final, x=x, solve_time=total_time, iterations=iterations, rates=rates)
-    out.value = final.graph.transform(objective_value(final, None, x), final.request)
+    out.value = final.graph.cost.transform(objective_value(final, None, x), final.request)
     return out
 
 
@@ -246,7 +246,7 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
                                        sols, settings.check_points, choice.belt_teeth)
             over = [max(0.0, -c.margin) for c in checks if c.name in enforced_checks(settings, drive.stepper) and math.isfinite(c.margin)]
             if req.objective == "min_peak_torque":  # the epigraph held at the nodes; the fine grid reads the peak
-                nlp_peak = nlp.graph.transform(objective_value(nlp, sol, x), nlp.request)
+                nlp_peak = nlp.graph.cost.transform(objective_value(nlp, sol, x), nlp.request)
                 fine_peak = next(c.value for c in checks if c.name == "peak_torque")
                 fine["peak_torque_nodes_N_m"] = nlp_peak
                 fine["peak_torque_fine_N_m"] = fine_peak
@@ -258,6 +258,6 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
             break
         mesh = Mesh(mesh.intervals * 2, mesh.degree)
         warm = None
-    value = nlp.graph.transform(objective_value(nlp, sol, x), nlp.request)
+    value = nlp.graph.cost.transform(objective_value(nlp, sol, x), nlp.request)
     return Outcome(nlp, x, sols, value, "optimal" if status == "Solve_Succeeded" else "acceptable", total_time,
                    iterations, fine, radius, motor, free_values=found)

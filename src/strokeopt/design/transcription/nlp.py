@@ -161,7 +161,8 @@ class Graph:
     T: list = field(default_factory=list)  # move durations (parameters, times the time scale)
     #: the cycle time relative to the request's (1.0; a decision variable of a free-time objective)
     time_scale: Any = 1.0
-    f: Any = None
+    f: Any = None  # the expression the solver minimises (the cost's, or the relaxed build's slack sum)
+    cost: Any = None  # the objective's Cost (objectives.py): its measure, unit and transform to SI
     solvers: dict = field(default_factory=dict)
     # the drive (see limits.build_drive)
     drive_model: Any = None
@@ -181,10 +182,6 @@ class Graph:
     handover_total: Any = 0.0
     handover_signed: Any = 0.0  # the summed signed error at each instant [m] (limits.HandoverAccuracy)
     handover_bound: Any = 0.0  # the bound added at each instant [m] (an encoder count)
-    # the objective (see objectives)
-    unit: str = ""
-    transform: Any = None  # scaled objective value, request -> SI value
-    objective_expr: Any = None  # the objective without the smoothing term (None: f itself)
 
     @property
     def problem(self):
@@ -245,7 +242,8 @@ def build_graph(req: SolveRequest, pins: tuple) -> Graph:
         build_drive(g)
     for lim in CONTACT_LIMITS:
         lim.on_cycle(g)
-    f = build_objective(g)
+    g.cost = build_objective(g)
+    f = g.cost.f
     if g.built.relaxed:
         f = sum(s for _, s in g.built.limits if s is not None) * 1e3 + 1e-6 * f
     g.f = f

@@ -1,17 +1,17 @@
 """The objectives of the design: one function per objective, in :data:`REGISTRY`.
 
 Each builder takes the :class:`~.nlp.Graph` under construction (after the moves and the drive's
-limits, :mod:`.limits`), returns the scaled objective expression and sets on the graph how to turn
-its value back into SI (``unit``, ``transform``; ``objective_expr`` when the expression carries
-a smoothing term). Read by :mod:`.settings` (the choices of ``[design] objective``) and
-:mod:`.nlp`.
+limits, :mod:`.limits`), adds the variables and rows its form needs (an epigraph) and returns its
+:class:`Cost`: the scaled expression the solver minimises, what it measures without the smoothing term,
+and how to turn that value back into SI. It writes nothing else on the graph. Read by :mod:`.settings`
+(the choices of ``[design] objective``) and :mod:`.nlp`.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Callable
+from typing import Any, Callable
 
 import casadi as ca
 import numpy as np
@@ -25,6 +25,18 @@ SMOOTHING = 1e-7
 #: interval keeps its fixed fraction of the cycle), and its bounds (one solve may move the rate 4x).
 TIME_SCALE = "time scale"
 TIME_SCALE_BOUNDS = (0.25, 4.0)
+
+
+@dataclass(frozen=True)
+class Cost:
+    """What an objective builder returns: ``f``, the scaled expression the solver minimises; ``measure``, the
+    objective without its smoothing term (None: ``f`` itself); ``unit`` and ``transform`` (scaled value,
+    request -> SI value) of the number the design reports."""
+
+    f: Any
+    unit: str
+    transform: Callable
+    measure: Any = None
 
 
 def _smoothing(g):
@@ -43,9 +55,7 @@ def min_peak_accel(g):
     for mv, x, T in zip(moves, g.vars, g.T):
         a = (abs(mv.stroke) / T**2 / a_ref) * x.hull("a")  # bounds the acceleration everywhere, not only at the nodes
         b.constrain(f"peak accel epigraph move {mv.index}", ca.vertcat(ca.vec(z - a), ca.vec(z + a)), 0.0, np.inf)
-    g.unit, g.transform = "m/s^2", (lambda f, r: f * a_ref)
-    g.objective_expr = z
-    return z + _smoothing(g)
+    return Cost(z + _smoothing(g), "m/s^2", lambda f, r: f * a_ref, z)
 
 
 def _integral_objective(kind: str, power: int, unit: str):
@@ -56,8 +66,7 @@ def _integral_objective(kind: str, power: int, unit: str):
         # integral over the move of (stroke/T^p * y^(k))^2 dt = stroke^2 / T^(2p-1) * integral over unit time
         ref = max(mv.stroke**2 / mv.duration**power for mv in moves)
         total = sum((mv.stroke**2 / T**power / ref) * x.integral(kind) for mv, x, T in zip(moves, g.vars, g.T))
-        g.unit, g.transform = unit, (lambda f, r: f * ref)
-        return total
+        return Cost(total, unit, lambda f, r: f * ref)
 
     return build
 
@@ -81,21 +90,17 @@ def min_peak_torque(g):
     if g.dwell_torques:
         tau_d = ca.vertcat(*g.dwell_torques)
         b.constrain("peak torque epigraph dwells", ca.vertcat(Z[-1] - tau_d, Z[-1] + tau_d), 0.0, np.inf)
-    g.unit, g.transform = "N m", (lambda f, r: f * tau_ref)
-    g.objective_expr = Z[0]
-    return Z[0] + _smoothing(g)
+    return Cost(Z[0] + _smoothing(g), "N m", lambda f, r: f * tau_ref, Z[0])
 
 
 def min_rms_torque(g):
     tau_ref = g.drive_model.tau_ref
-    g.unit, g.transform = "N m", (lambda f, r: math.sqrt(max(f, 0.0)) * tau_ref)
-    return g.mean_sq
+    return Cost(g.mean_sq, "N m", lambda f, r: math.sqrt(max(f, 0.0)) * tau_ref)
 
 
 def min_energy(g):
     tau_ref = g.drive_model.tau_ref
-    g.unit, g.transform = "N^2 m^2 s", (lambda f, r: f * tau_ref**2 * r.period)
-    return g.move_sq
+    return Cost(g.move_sq, "N^2 m^2 s", lambda f, r: f * tau_ref**2 * r.period)
 
 
 def min_time(g):
@@ -103,9 +108,7 @@ def min_time(g):
     every limit. Its value is the stitch period [s] (``60 / spm``); the rate it allows is the request's
     divided by the scale. The numbers computed at the request's rate (the servo term's kernel and load
     error) are exact at scale 1: :func:`~.refine.solve_one` re-solves at the new rate until it stays."""
-    g.unit, g.transform = "s", (lambda f, r: f * 60.0 / r.spm)
-    g.objective_expr = g.time_scale
-    return g.time_scale + _smoothing(g)
+    return Cost(g.time_scale + _smoothing(g), "s", lambda f, r: f * 60.0 / r.spm, g.time_scale)
 
 
 def min_handover_error(g):
@@ -120,9 +123,7 @@ def min_handover_error(g):
     z = b.var("handover error", (1, 1), 0.0, np.inf, 1.0)
     b.constrain("handover error epigraph", ca.vertcat(z - (signed + bound) / scale, z - (bound - signed) / scale),
                 0.0, np.inf)
-    g.unit, g.transform = "mm", (lambda f, r: f * scale * 1e3)
-    g.objective_expr = z
-    return z + _smoothing(g)
+    return Cost(z + _smoothing(g), "mm", lambda f, r: f * scale * 1e3, z)
 
 
 def min_stiffness(g):
@@ -139,11 +140,8 @@ def min_stiffness(g):
     expr = sum(k / bounds[name] for name, k in free.items())
     if len(free) == 1:
         hi = next(iter(bounds.values()))
-        g.unit, g.transform = "N/m", (lambda f, r: f * hi)
-    else:
-        g.unit, g.transform = "-", (lambda f, r: f)
-    g.objective_expr = expr
-    return expr + 1e3 * _smoothing(g)
+        return Cost(expr + 1e3 * _smoothing(g), "N/m", lambda f, r: f * hi, expr)
+    return Cost(expr + 1e3 * _smoothing(g), "-", lambda f, r: f, expr)
 
 
 @dataclass(frozen=True)
@@ -209,8 +207,8 @@ def unknown_objective_error(objective: str) -> ProblemError:
     return ProblemError("--objective", "", f"{objective!r} is not one of {', '.join(OBJECTIVES)}")
 
 
-def build_objective(g):
-    """The scaled objective expression of ``g``'s request."""
+def build_objective(g) -> Cost:
+    """The :class:`Cost` of ``g``'s request's objective."""
     objective = g.request.objective
     found = REGISTRY.get(objective)
     if found is None:
