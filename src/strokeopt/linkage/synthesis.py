@@ -53,6 +53,8 @@ class SynthesisResult:
     feasible_screened: int = 0
     seconds: float = 0.0
 
+    note: str = ""
+
     def to_dict(self, kin: Kinematics) -> dict:
         def one(c):
             lk = kin.linkage.with_reference(c.coords)
@@ -61,7 +63,7 @@ class SynthesisResult:
         return {"best": one(self.best), "runners_up": [one(c) for c in self.runners_up],
                 "starts_solved": self.starts, "geometries_screened": self.screened,
                 "screened_feasible": self.feasible_screened, "seconds": round(self.seconds, 2),
-                "unique": not self.runners_up,
+                "unique": not self.runners_up, "targets_note": self.note,
                 "note": "the targets do not determine a unique linkage: distinct geometries fit them"
                         if self.runners_up else "no distinct runner-up among the solved starts"}
 
@@ -99,7 +101,7 @@ def synthesize(problem, starts: int | None = None, screen: int | None = None, se
         if all(np.abs(c.lengths(kin) - d.lengths(kin)).max() > 1e-3 for d in [found[0], *distinct]):
             distinct.append(c)
     return SynthesisResult(found[0], distinct[:3], min(starts, len(pool)), tried, len(pool),
-                           time.perf_counter() - t0)
+                           time.perf_counter() - t0, spec.note)
 
 
 def _closes(problem) -> bool:

@@ -37,6 +37,7 @@ class SynthesisSpec:
     minimum_tol: float = 0.0
     defect_tol: float = 2e-3        # m, trapezoidal tie between nodes (a branch change breaks it by far more)
     start_from_file: bool = False   # the file's own geometry is one of the starts
+    note: str = ""                  # what the targets leave out, printed with the fit
 
     def shape_ok(self, linkage, tol: float = 1e-6) -> bool:
         """Bounds, fixed lengths and fixed angles hold (a start IPOPT left infeasible does not)."""
@@ -147,6 +148,7 @@ def read_spec(problem, f: Fields) -> SynthesisSpec:
         f.number("starts", 8, min=1, max=200, integer=True), f.number("screen", 1500, min=10, max=100000, integer=True),
         f.number("seed", 1, min=0, max=2 ** 31, integer=True))
     spec.start_from_file = f.boolean("start_from_file", False)
+    spec.note = f.string("note", "")
     if f.has("swing_deg"):
         spec.swing_output = f.string("swing_output", choices=tuple(outputs))
         spec.swing = math.radians(f.number("swing_deg", min=0.1, max=180))

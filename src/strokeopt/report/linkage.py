@@ -86,6 +86,8 @@ def synthesis_text(r: dict, rms_max: float) -> str:
                                                                       if "swing_deg" in c else "")
                      + "; joints mm " + ", ".join(f"{n} ({x:g}, {y:g})" for n, (x, y) in c["joints_mm"].items()))
     lines.append(r["note"])
+    if r.get("targets_note"):
+        lines.append(r["targets_note"])
     lines.append("best joints (paste into [[transmission.joints]], mm):")
     lines += [f"  {n}: x_mm = {x}, y_mm = {y}" for n, (x, y) in b["joints_mm"].items()]
     return "\n".join(lines)
