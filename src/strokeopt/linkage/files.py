@@ -66,9 +66,7 @@ def load_linkage_file(path, overrides: list[str] | None = None, check_cycle: boo
     linkage, limits = _read_linkage(tr, file, name, gravity)
     tr.finish()
     synth = top.table("synthesis", required=False)
-    synthesis = dict(synth.data) if synth is not None else {}
-    if synth is not None:
-        synth._read.update(synth.data)   # synthesis.py validates its own section
+    synthesis = dict(synth.data) if synth is not None else {}   # checked below by targets.read_spec
     top.finish()
     problem = LinkageProblem(file, name, description, linkage, rpm, *limits, synthesis)
     if synth is not None:   # checked now (names, ranges, misspelt keys), used by --synthesize
