@@ -86,9 +86,18 @@ METRICS: tuple[Metric, ...] = (
     Metric("min_gap_N_mm", "gap", "smallest remaining gap before the impact (output grid, refined around its minimum)"),
     Metric("release_angle_deg", "release", "cam angle where the release grip's condition ends"),
     Metric("premature_release", "gap", "gap closed (or grip released) before the impact; None without an impact"),
-    Metric("peak_pad_force_N", "impact", "peak force of the impact contact (on the output grid)"),
-    Metric("peak_drive_force_N", None, "peak force the drive supplies to the driven body (on the output grid)"),
-    Metric("peak_contact_forces_N", None, "peak force of each element of the scene (on the output grid)"),
+    Metric("peak_pad_force_N", "impact", "peak force of the impact contact (located between the output points)"),
+    Metric("peak_drive_force_N", None, "peak force the drive supplies to the driven body (located between the output "
+                                       "points)"),
+    Metric("peak_contact_forces_N", None, "peak force of each element of the scene (located between the output points)"),
+    Metric("peak_drive_force_angle_deg", None, "cam angle of the drive force's peak"),
+    Metric("peak_contact_force_angles_deg", None, "cam angle of each element's peak force"),
+    Metric("peak_drive_force_error_pct", None, "estimated error of the drive force's peak: its window integrated again "
+                                               "at 1/100 of the tolerances (None: not estimated)"),
+    Metric("peak_contact_force_errors_pct", None, "estimated error of each element's peak, as for the drive force"),
+    Metric("peak_forces_converged", None, "every peak's estimated error within 5 % (None: not estimated); the "
+                                          "peaks that are not are named in unconverged_peaks"),
+    Metric("unconverged_peaks", None, "the peaks whose estimated error is above 5 % ('drive' for the drive force)", ()),
 )
 METRIC_KEYS: tuple[str, ...] = tuple(mt.key for mt in METRICS)
 
@@ -160,12 +169,14 @@ def _refined_min(refine, i, n, t_end, y) -> float:
 # --------------------------------------------------------------------------- metrics
 
 
-def scene_metrics(r, sc, refine=None) -> dict:
+def scene_metrics(r, sc, refine=None, peaks=None) -> dict:
     """The metrics of :data:`METRICS` from a trajectory (None where not defined).
 
     ``r``: a :class:`~strokeopt.contact.simulate.SceneResult` (its ``remaining_gap`` is set here);
     ``sc``: its scene. ``refine(i)``: the trajectory re-integrated finely inside output interval
     ``i`` (events are located there); without it events are interpolated on the output grid.
+    ``peaks``: element name (None for the drive force) -> :class:`~strokeopt.contact.peaks.Peak`,
+    located between the output points (peaks.py); without them the peaks are the output grid's maxima.
     """
     model = sc.model
     roles = model.events
@@ -190,7 +201,7 @@ def scene_metrics(r, sc, refine=None) -> dict:
             t_imp, S, i = hit
             m["impact_angle_deg"] = float(t_imp * deg)
             m["impact_velocity_m_s"] = _linear(S.t, S.velocities[ba], t_imp, i)
-        m["peak_pad_force_N"] = float(np.max(np.abs(r.forces[roles.impact])))
+        m["peak_pad_force_N"] = float(peaks[roles.impact].value if peaks else np.max(np.abs(r.forces[roles.impact])))
     f = roles.follower
     d = sc.driven
     if f and f in sc.bodies and f != d:
@@ -229,6 +240,22 @@ def scene_metrics(r, sc, refine=None) -> dict:
                     closed_before_impact = True  # released before the impact: the gap closed between output points
     if m["gap_N_mm"] is not None and t_imp is not None:
         m["premature_release"] = closed_before_impact
-    m["peak_drive_force_N"] = float(np.max(np.abs(r.drive_force)))
-    m["peak_contact_forces_N"] = {e: float(np.max(np.abs(fv))) for e, fv in r.forces.items()}
+    if not peaks:
+        m["peak_drive_force_N"] = float(np.max(np.abs(r.drive_force)))
+        m["peak_contact_forces_N"] = {e: float(np.max(np.abs(fv))) for e, fv in r.forces.items()}
+        return m
+    m["peak_drive_force_N"] = peaks[None].value
+    m["peak_contact_forces_N"] = {e: peaks[e].value for e in r.forces}
+    m["peak_drive_force_angle_deg"] = peaks[None].t * deg
+    m["peak_contact_force_angles_deg"] = {e: peaks[e].t * deg for e in r.forces}
+    if any(p.error is not None for p in peaks.values()):
+
+        def pct(p):
+            return None if p.error is None else 100.0 * p.error
+
+        m["peak_drive_force_error_pct"] = pct(peaks[None])
+        m["peak_contact_force_errors_pct"] = {e: pct(peaks[e]) for e in r.forces}
+        m["unconverged_peaks"] = tuple("drive" if e is None else e for e, p in peaks.items() if p.converged is False)
+        unknown = any(p.converged is None for p in peaks.values())
+        m["peak_forces_converged"] = False if m["unconverged_peaks"] else (None if unknown else True)
     return m

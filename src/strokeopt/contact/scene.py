@@ -14,6 +14,11 @@ velocities in m/s. Time is normalised per stroke piece (``sigma`` in [0, 1],
 every joint of the stroke (where its derivatives may jump) with the piece
 index and duration as parameters.
 
+A scene has a time budget: ``max_steps`` (default :data:`MAX_STEPS`), the integrator steps one cycle
+may take at the default tolerance (simulate.py stops a scene that needs more, naming its stiffest
+contact and the step it forced, and refuses at once a contact whose period is shorter than the
+budget's mean step: :meth:`Scene.contact_periods`).
+
 Switching: ``smoothing = 0`` uses hard ``if_else`` switches (the source's
 ``L = 1 while c >= 0``); ``smoothing = eps > 0`` (m) replaces the compression
 by ``eps * softplus(c / eps)`` and the switch by ``sigmoid(c / eps)``, which
@@ -23,6 +28,7 @@ what each costs).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -35,15 +41,65 @@ if TYPE_CHECKING:
     from ..motion.stroke import StrokeFunction
 
 
+#: Integrator steps a scene may take over one cycle at the default tolerance (rtol 1e-5), unless its
+#: ``max_steps`` says otherwise: 20 times what the reference problem's scenes take (release 22 600, handover
+#: 51 300 at 500 spm; a million steps are 3-4 s of CPU). A tighter tolerance gets more (``step_budget``).
+MAX_STEPS = 1_000_000
+BUDGET_RTOL = 1e-5  # the tolerance max_steps is stated at
+
+
 @dataclass(frozen=True)
 class Scene:
-    """The bodies and elements of a model that one simulation needs."""
+    """The bodies and elements of a model that one simulation needs.
+
+    ``max_steps``: the integrator steps one cycle may take at the default tolerance (its time budget: a scene
+    that needs more stops, naming its stiffest contact)."""
 
     name: str
     model: Model = field(repr=False)
     bodies: tuple[str, ...]
     elements: tuple[str, ...]
     description: str = ""
+    max_steps: int = MAX_STEPS
+
+    def step_budget(self, rtol: float) -> int:
+        """The steps a cycle may take at relative tolerance ``rtol``: ``max_steps``, times
+        ``(1e-5 / rtol)^(1/3)`` below 1e-5 (BDF of order 2 takes steps ~ rtol^(1/3): 22 600 at 1e-5,
+        200 000 at 1e-8, 980 000 at 1e-10 in the release scene)."""
+        return int(self.max_steps * max(1.0, (BUDGET_RTOL / rtol) ** (1.0 / 3.0)))
+
+    def check_resolvable(self, file: str, period: float, budget: int) -> None:
+        """Refuse a scene whose stiffest contact rings faster than ``budget`` steps can follow over a cycle of
+        ``period`` s: a contact period shorter than ``period / budget`` leaves less than one step per period even
+        if every step of the budget went to it (a ProblemError naming the contact's stiffness)."""
+        from ..errors import ProblemError
+
+        periods = self.contact_periods()
+        if not periods or periods[0][0] >= period / budget:
+            return
+        shortest, name, body = periods[0]
+        el = self.model.elements[name]
+        table = "links" if el.kind == "link" else ("springs" if el.kind == "spring" else "contacts")
+        k_max = el.stiffness * (shortest * budget / period) ** 2
+        raise ProblemError(file, f"model.{table}.{name}.stiffness_N_m",
+                           f"{el.stiffness:.3g} N/m on the {self.model.bodies[body].mass * 1e3:.3g} g {body} rings with "
+                           f"a period of {shortest:.2g} s, shorter than scene {self.name!r} can resolve in its cycle of "
+                           f"{period:.3g} s with its budget of {budget:,} steps ({period / budget:.2g} s a step): soften "
+                           f"it (below {k_max:.2g} N/m), or raise scenes.{self.name}.max_steps")
+
+    def contact_periods(self) -> list[tuple[float, str, str]]:
+        """``(period s, element, lightest body)`` of every element with a linear stiffness, shortest first:
+        ``2 pi sqrt(m / k)`` with ``m`` the lightest body on it (the frame and force laws aside)."""
+        out = []
+        for el in self.element_objects:
+            if el.force_law is not None or not el.stiffness > 0:
+                continue
+            bodies = [b for b in el.bodies if b != FRAME]
+            if not bodies:
+                continue
+            light = min(bodies, key=lambda b: self.model.bodies[b].mass)
+            out.append((2 * math.pi * math.sqrt(self.model.bodies[light].mass / el.stiffness), el.name, light))
+        return sorted(out)
 
     @property
     def driven(self) -> str:
@@ -78,7 +134,8 @@ def default_scene(scenes: dict) -> str:
     return "release" if "release" in scenes else next(iter(scenes))
 
 
-def make_scene(model: Model, name: str, bodies, elements, description: str = "", where=None) -> Scene:
+def make_scene(model: Model, name: str, bodies, elements, description: str = "", where=None,
+               max_steps: int = MAX_STEPS) -> Scene:
     """A scene from names, checked against the model. ``where = (file, field)`` for error messages."""
     from ..errors import ProblemError
 
@@ -106,7 +163,7 @@ def make_scene(model: Model, name: str, bodies, elements, description: str = "",
                                                         f"{', '.join(map(repr, missing))}, which the scene does not name")
     if len(set(elements)) != len(elements):
         raise ProblemError(file, f"{fld}.elements", "names an element twice")
-    return Scene(name, model, bodies, elements, description)
+    return Scene(name, model, bodies, elements, description, int(max_steps))
 
 
 def parse_scenes(f: "Fields | None", model: Model | None) -> dict[str, Scene] | None:
@@ -119,13 +176,17 @@ def parse_scenes(f: "Fields | None", model: Model | None) -> dict[str, Scene] | 
     for name in list(f.data):
         sf = f.table(name)
         description = sf.string("description", "")
+        # the steps one cycle may take at rtol 1e-5 (more at tighter tolerances): at least 10 000 (the reference
+        # scenes take 22 600 and 51 300), at most 1e9 (an hour of CPU)
+        max_steps = sf.number("max_steps", MAX_STEPS, integer=True, min=10_000, max=1e9)
         bodies = sf.raw("bodies")
         elements = sf.raw("elements", [])
         for key, value in (("bodies", bodies), ("elements", elements)):
             if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
                 raise sf.error(key, f"must be an array of names, got {value!r}")
         sf.finish()
-        scenes[name] = make_scene(model, name, bodies, elements, description, where=(sf.file, sf.path))
+        scenes[name] = make_scene(model, name, bodies, elements, description, where=(sf.file, sf.path),
+                                  max_steps=max_steps)
     f.finish()
     if not scenes:
         raise f.error("", "defines no scene")
@@ -171,7 +232,8 @@ class SceneODE:
     * ``dae``: ``{"x", "p", "t", "ode"}`` for ``casadi.integrator`` in normalised piece time
       ``sigma``, ``p = [piece index, piece start time, piece duration]``;
     * ``outputs``: Function ``(sigma, x, p) -> [t, x_d, v_d, a_d, accelerations, element forces, drive force]``
-      (SI) to evaluate along a trajectory.
+      (SI) to evaluate along a trajectory;
+    * ``forces``: Function ``(sigma, x, p) -> [element forces; drive force]`` (N), the same forces alone.
     """
 
     def __init__(self, scene: Scene, stroke: "StrokeFunction", sign: float, s_ref: float, smoothing: float):
@@ -274,9 +336,16 @@ class SceneODE:
              ca.vertcat(*rider_out) if rider_out else ca.SX(0, 1)],
             ["sigma", "z", "p"], ["t", "x_d", "v_d", "a_d", "acc", "forces", "drive", "riders"])
         self.rhs = ca.Function("scene_rhs", [sigma, z, p], [ode], ["sigma", "z", "p"], ["ode"])
+        # the element forces and the drive force in one column (peaks.py locates their peaks)
+        self.forces = ca.Function("scene_forces", [sigma, z, p], [ca.vertcat(*forces, drive)], ["sigma", "z", "p"],
+                                  ["forces"])
         # the switching functions (an element acts while its value is >= 0), one per element
-        self.switches = ca.Function("scene_switches", [sigma, z, p],
-                                    [ca.vertcat(*switches) if switches else ca.SX(0, 1)], ["sigma", "z", "p"], ["sw"])
+        sw = ca.vertcat(*switches) if switches else ca.SX(0, 1)
+        self.switches = ca.Function("scene_switches", [sigma, z, p], [sw], ["sigma", "z", "p"], ["sw"])
+        # and their rates in time (1/s times their unit): how fast an element nears acting (peaks.py)
+        rate = (ca.jtimes(sw, z, ode) + ca.jacobian(sw, sigma)) / dur if switches else ca.SX(0, 1)
+        self.switch_rates = ca.Function("scene_switch_rates", [sigma, z, p], [sw, rate], ["sigma", "z", "p"],
+                                        ["sw", "rate"])
 
     @property
     def state_size(self) -> int:

@@ -5,7 +5,10 @@ body following a :class:`~strokeopt.motion.stroke.StrokeFunction` (a classic law
 optimised stroke) over one cycle, from rest at x = 0, and returns a
 :class:`SceneResult`: the trajectory on a fine output grid, the element and
 drive forces, and the metrics of events.py (impact, lag, remaining gap, release),
-its events located on the trajectory re-integrated finely around them.
+its events located on the trajectory re-integrated finely around them, its peak forces located
+between the output points with an error estimate each (peaks.py). A scene has a step budget
+(scene.py ``max_steps``): one whose contacts ring faster than it can follow is refused, one that
+needs more steps stops, naming its stiffest contact.
 
 The integration is shared by every integrator: :func:`integrate_scene` takes a
 *stepper* (how one stroke piece and one output interval are integrated) and does
@@ -71,13 +74,15 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import casadi as ca
 import numpy as np
 
 from ..errors import ProblemError, SolverError
 from .events import scene_metrics
+from .scene import BUDGET_RTOL
+from .peaks import PEAK_POINTS, TIGHTER, scene_peaks
 
 METHODS = ("cvodes", "idas")
 REFINE_POINTS = 200  # an output interval is re-integrated on this many points to locate an event in it
@@ -94,6 +99,9 @@ class SimulationOptions:
     (restarting the integrator at each) instead of across them; slower, kept for the
     comparison of the tolerance study. ``integrator_options`` pass straight to ``casadi.integrator``.
     ``verbose``: let SUNDIALS print its own messages (otherwise only the SolverError says why).
+    ``max_steps``: the integrator steps the cycle may take (None: the scene's budget at this tolerance,
+    :meth:`~strokeopt.contact.scene.Scene.step_budget`); a scene that needs more stops with a SolverError
+    naming its stiffest contact and the step it forced.
     """
 
     method: str = "cvodes"
@@ -101,7 +109,7 @@ class SimulationOptions:
     atol: float = 1e-6
     smoothing: float = 0.0
     resolution_deg: float = 0.25
-    max_num_steps: int = 200_000
+    max_steps: int | None = None
     restart_at_switches: bool = False
     integrator_options: dict | None = None
     verbose: bool = False
@@ -115,6 +123,8 @@ class SimulationOptions:
                 raise ProblemError("options", name, f"must be a positive number, got {value!r}")
         if not (math.isfinite(self.smoothing) and self.smoothing >= 0):
             raise ProblemError("options", "smoothing", f"must be zero (hard switches) or positive, got {self.smoothing!r}")
+        if self.max_steps is not None and not (isinstance(self.max_steps, int) and self.max_steps >= 1):
+            raise ProblemError("options", "max_steps", f"must be a whole number of steps >= 1, got {self.max_steps!r}")
 
 
 @dataclass
@@ -127,10 +137,9 @@ class SceneResult:
     what the elements push back: ``m a - sum of element forces on it`` (N); ``metrics``: those
     of :data:`strokeopt.contact.events.METRICS`. Figures: :func:`strokeopt.report.contact.plot_scene`.
 
-    Peak forces are maxima over the output grid. The pad's (a soft polynomial law) agree
-    across tolerances; those of the 1e9 N/m contacts and the drive force they load are
-    impact spikes microseconds long and depend on the grid and the tolerance: read them as
-    orders of magnitude.
+    Peak forces (``metrics``) are located between the output points (peaks.py: the 1e9 N/m contacts
+    and the drive force they load spike for microseconds), each with an error estimate; the series
+    here are on the output grid and miss most spikes.
     """
 
     scene: str
@@ -189,11 +198,12 @@ def drive_reference(problem) -> tuple[float, float]:
 _drive_reference = drive_reference  # the name tests/test_scene.py imports
 
 
-def _integrator(ode, opts: SimulationOptions, grid: np.ndarray, refine: bool = False):
+def _integrator(ode, opts: SimulationOptions, grid: np.ndarray, refine: bool = False, max_steps: int = 200_000):
     dae = ode.refine_dae if refine else ode.dae
     # BDF order <= 2: the orders 3-5 are not A-stable, and the lightly damped contact modes
-    # (1e5-1e6 rad/s, damping ratio ~0.01) made CVODES fail its error test over and over (4-10x more steps)
-    iopts = {"abstol": opts.atol, "reltol": opts.rtol, "max_num_steps": opts.max_num_steps, "max_order": 2,
+    # (1e5-1e6 rad/s, damping ratio ~0.01) made CVODES fail its error test over and over (4-10x more steps);
+    # max_num_steps bounds the steps between two output points (CVODES counts per output point)
+    iopts = {"abstol": opts.atol, "reltol": opts.rtol, "max_num_steps": int(max_steps), "max_order": 2,
              "disable_internal_warnings": not opts.verbose}  # SUNDIALS prints "At t = ..." to stdout otherwise
     iopts.update(opts.integrator_options or {})
     return ca.integrator("scene_refine" if refine else "scene", opts.method, dae, 0.0, grid[1:], iopts)
@@ -205,7 +215,7 @@ _FLAG_WORDS = {
                    "near-singular, e.g. a body of almost no mass)",
     "CONV_FAILURE": "the corrector did not converge (the step shrank to its minimum: the model is too stiff or "
                     "near-singular)",
-    "TOO_MUCH_WORK": "max_num_steps reached",
+    "TOO_MUCH_WORK": "the step budget ran out",
     "TOO_MUCH_ACC": "the tolerances are tighter than the arithmetic allows",
 }
 
@@ -233,23 +243,88 @@ class CasadiStepper:
     def __init__(self, ode, grid: np.ndarray, opts: SimulationOptions, scene: str, spm: float):
         self.ode, self.opts, self.scene, self.spm = ode, opts, scene, spm
         self.name = opts.method
-        self._piece = _integrator(ode, opts, grid)
+        self.budget = step_budget(ode.scene, opts)
+        self.steps = 0  # of the stroke pieces so far
+        self._piece = _integrator(ode, opts, grid, max_steps=self.budget)
         self._segment = None  # built on first use
+        self._windows = {}  # peak windows (peaks.py), at the tolerances and tighter
         self.segment_steps = 0
 
     def piece(self, k, piece, z, pk):
+        """One stroke piece; stops the scene once its steps pass the budget (one output interval may take the
+        whole budget: the check after the piece then stops it)."""
         integ = self._piece
         try:
             res = integ(x0=z, p=pk)
         except RuntimeError as exc:
+            if "TOO_MUCH_WORK" in str(exc):
+                raise self._over_budget(k, piece, integ.stats(), None) from None
             raise SolverError(f"{self.opts.method} failed in stroke piece {k + 1} ({piece.label}) of scene "
-                              f"{self.scene!r} at {self.spm:g} spm: {_why(exc)} (tighten or loosen the tolerances, "
-                              f"or raise max_num_steps)") from None
-        return np.asarray(res["xf"]), int(integ.stats().get("nsteps", 0) or 0)
+                              f"{self.scene!r} at {self.spm:g} spm: {_why(exc)} (tighten or loosen the "
+                              f"tolerances)") from None
+        steps = int(integ.stats().get("nsteps", 0) or 0)
+        self.steps += steps
+        if self.steps > self.budget:
+            raise self._over_budget(k, piece, integ.stats(), steps)
+        return np.asarray(res["xf"]), steps
+
+    def _over_budget(self, k, piece, stats, steps) -> SolverError:
+        """The scene needed more steps than its budget: where, the step it was taking, the stiffest contact.
+        ``steps``: those of the piece when it ended past the budget (None: stopped inside it)."""
+        sc = self.ode.scene
+        if steps is None:
+            h = float(stats.get("hlast") or 0.0) * piece.duration
+            sigma = float(stats.get("tcur") or 0.0)
+            where = f"{(piece.t_start + sigma * piece.duration) * 1e3:.4g} ms into the cycle, " if 0 < sigma <= 1 else ""
+            step = f"its steps had shrunk to {h:.2g} s" if h > 0 else "its steps had shrunk"
+        else:
+            where = f"the end ({(piece.t_start + piece.duration) * 1e3:.4g} ms into the cycle) of "
+            step = f"its steps there averaged {piece.duration / max(steps, 1):.2g} s"
+        periods = sc.contact_periods()
+        stiff = ""
+        if periods:
+            period, name, body = periods[0]
+            el = sc.model.elements[name]
+            table = "links" if el.kind == "link" else ("springs" if el.kind == "spring" else "contacts")
+            stiff = (f", forced by its stiffest contact {name} ({el.stiffness:.3g} N/m on the "
+                     f"{sc.model.bodies[body].mass * 1e3:.3g} g {body}: contact period {period:.2g} s); soften it "
+                     f"(model.{table}.{name}.stiffness_N_m) or")
+        if self.opts.max_steps is not None:
+            budget = "the max_steps option"
+        elif self.budget == sc.max_steps:
+            budget = f"scenes.{sc.name}.max_steps"
+        else:
+            budget = f"scenes.{sc.name}.max_steps = {sc.max_steps:,} at rtol {BUDGET_RTOL:g}, scaled to rtol {self.opts.rtol:g}"
+        return SolverError(f"scene {self.scene!r} at {self.spm:g} spm stopped after {self.budget:,} integrator steps "
+                           f"(its budget: {budget}); it had reached {where}stroke piece {k + 1} ({piece.label}), "
+                           f"and {step}{stiff or ';'} raise scenes.{sc.name}.max_steps")
+
+    def window(self, pk, z0, sa, sb, tight=False, points=PEAK_POINTS):
+        """``z0`` and the states on ``points`` points from ``sigma_a`` to ``sigma_b`` (peaks.py); ``tight``: at
+        the tolerances divided by TIGHTER (its accuracy estimate; None if the integrator fails there)."""
+        if not tight and points == REFINE_POINTS:  # the event location's integrator
+            return self.segment(pk, z0, sa, sb)
+        integ = self._windows.get((tight, points))
+        if integ is None:
+            opts = self.opts
+            if tight:
+                opts = replace(opts, rtol=max(opts.rtol / TIGHTER, 1e-12), atol=max(opts.atol / TIGHTER, 1e-13))
+            integ = self._windows[tight, points] = _integrator(self.ode, opts, np.linspace(0.0, 1.0, points + 1),
+                                                               refine=True, max_steps=self.budget)
+        try:
+            xf = np.asarray(integ(x0=z0, p=np.concatenate([pk, [sa, sb]]))["xf"])
+        except RuntimeError as exc:
+            if tight:
+                return None
+            raise SolverError(f"{self.opts.method} failed locating a peak force between {sa:.6g} and {sb:.6g} of stroke "
+                              f"piece {int(pk[0]) + 1} of scene {self.scene!r}: {_why(exc)}") from None
+        self.segment_steps += int(integ.stats().get("nsteps", 0) or 0)
+        return np.hstack([np.asarray(z0, float)[:, None], xf])
 
     def segment(self, pk, z0, sa, sb):
         if self._segment is None:
-            self._segment = _integrator(self.ode, self.opts, np.linspace(0.0, 1.0, REFINE_POINTS + 1), refine=True)
+            self._segment = _integrator(self.ode, self.opts, np.linspace(0.0, 1.0, REFINE_POINTS + 1), refine=True,
+                                        max_steps=self.budget)
         try:
             xf = np.asarray(self._segment(x0=z0, p=np.concatenate([pk, [sa, sb]]))["xf"])
         except RuntimeError as exc:
@@ -257,6 +332,11 @@ class CasadiStepper:
                               f"{int(pk[0]) + 1} of scene {self.scene!r}: {_why(exc)}") from None
         self.segment_steps += int(self._segment.stats().get("nsteps", 0) or 0)
         return np.hstack([np.asarray(z0, float)[:, None], xf])
+
+
+def step_budget(scene, opts: SimulationOptions) -> int:
+    """The integrator steps a cycle of ``scene`` may take with ``opts`` (its own budget unless ``opts.max_steps``)."""
+    return int(opts.max_steps) if opts.max_steps is not None else scene.step_budget(opts.rtol)
 
 
 # --------------------------------------------------------------------------- the shared core
@@ -292,6 +372,7 @@ def integrate_scene(problem, scene: str, spm: float | None, stroke, options: Sim
     if abs(stroke.period - period) > 1e-9 * period:
         raise ProblemError(str(problem.file), "machine.spm", f"the stroke's period {stroke.period:g} s is not the cycle "
                                                              f"time {period:g} s at {spm:g} spm")
+    sc.check_resolvable(str(problem.file), period, step_budget(sc, opts))
     cpu0 = time.process_time()
     sign, s_ref = drive_reference(problem)
     ode = sc.build(stroke, sign, s_ref, opts.smoothing)
@@ -411,6 +492,8 @@ def _run(sc, scene, spm, stroke, period, ode, grid, stepper, opts, cpu0) -> Scen
         ssub = np.linspace(S[i], S[i + 1], zsub.shape[1])
         return _Series(*_series(ode, sc, zsub, ssub, np.tile(P[:, i:i + 1], (1, len(ssub))))[:4])
 
-    result.metrics = scene_metrics(result, sc, refine)
+    peaks = scene_peaks(sc, ode, result, Z, S, P, stepper) if nx else None
+    result.metrics = scene_metrics(result, sc, refine, peaks)
     result.cpu_time_s = time.process_time() - cpu0
     return result
+
