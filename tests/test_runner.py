@@ -110,6 +110,28 @@ def test_unreachable_scheduler_is_one_line_exit_2_before_any_work(capsys, monkey
     assert capsys.readouterr().err.startswith("strokeopt: error: STROKEOPT_SCHEDULER: cannot reach")
 
 
+def test_a_server_that_is_no_dask_scheduler_is_one_line(capsys):
+    import threading
+
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen()
+
+        def answer():  # an HTTP server, say: it answers a Dask handshake with an error page
+            conn, _ = server.accept()
+            with conn:
+                conn.sendall(b"HTTP/1.1 400 Bad Request\r\n\r\n")
+
+        threading.Thread(target=answer, daemon=True).start()
+        address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+        t0 = time.perf_counter()
+        assert main(["solve", str(MIN_JERK), *SWEEP, "--plot", "none", "--scheduler", address]) == 2
+        assert time.perf_counter() - t0 < 5.0
+    assert capsys.readouterr().err.strip() == (f"strokeopt: error: --scheduler: no Dask scheduler at {address}: the "
+                                               "server there does not greet as Dask does; give the address of 'dask "
+                                               "scheduler'")
+
+
 @pytest.mark.parametrize("address", ["127.0.0.1:8786", "tcp://127.0.0.1", "tcp://127.0.0.1:0", "tcp://:8786",
                                      "tcp://127.0.0.1:70000", "udp://127.0.0.1:8786"])
 def test_scheduler_address_is_checked_like_a_field(capsys, address):

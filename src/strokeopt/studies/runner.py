@@ -305,7 +305,7 @@ def _reach(runner: StudyRunner):
     with _quiet_dask():
         try:
             client = Client(runner.scheduler, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
-        except (OSError, TimeoutError) as exc:
+        except Exception as exc:  # noqa: BLE001  (whatever the connection met: one line)
             raise ProblemError(runner.source, "", f"cannot reach the Dask scheduler at {runner.scheduler} within "
                                                   f"{CONNECT_TIMEOUT_S:g} s ({_one_line(exc)[:120]}); start one with "
                                                   "'dask scheduler' or give another address") from None
@@ -349,6 +349,10 @@ def _ctrl_c_held():
         return
     try:
         yield held
+    except BaseException:
+        if held:  # the start failed because of the Ctrl-C (a worker process interrupted as it started)
+            raise KeyboardInterrupt from None
+        raise
     finally:
         signal.signal(signal.SIGINT, before)
     if held:
@@ -356,18 +360,33 @@ def _ctrl_c_held():
 
 
 def _probe(runner: StudyRunner) -> None:
-    """A refused or unroutable address is said at once (Dask's own connect retries until its timeout)."""
+    """A refused or unroutable address, or a server that is no Dask scheduler, said at once (Dask's own connect
+    retries until its timeout, and reads whatever a server sends as a message length). A Dask scheduler greets a
+    connection with its handshake: one message, its length first (8 bytes, little-endian)."""
     import socket
+    import struct
 
     m = _ADDRESS.fullmatch(runner.scheduler)
     host, port = m["host"].strip("[]"), int(m["port"])
     try:
-        with socket.create_connection((host, port), timeout=CONNECT_TIMEOUT_S):
-            pass
+        with socket.create_connection((host, port), timeout=CONNECT_TIMEOUT_S) as sock:
+            sock.settimeout(CONNECT_TIMEOUT_S)
+            greeting = b""
+            while len(greeting) < 8:
+                chunk = sock.recv(8 - len(greeting))
+                if not chunk:
+                    break
+                greeting += chunk
+    except socket.timeout:
+        greeting = None
     except OSError as exc:
         why = exc.strerror or str(exc) or type(exc).__name__
         raise ProblemError(runner.source, "", f"cannot reach the Dask scheduler at {runner.scheduler} ({why.lower()}"
                                               "): start one with 'dask scheduler' or give another address") from None
+    if greeting is None or len(greeting) < 8 or not 0 < struct.unpack("<Q", greeting)[0] < 1 << 20:
+        said = f"said nothing within {CONNECT_TIMEOUT_S:g} s" if not greeting else "does not greet as Dask does"
+        raise ProblemError(runner.source, "", f"no Dask scheduler at {runner.scheduler}: the server there {said}; "
+                                              "give the address of 'dask scheduler'")
 
 
 @contextmanager
