@@ -12,7 +12,8 @@ The data flow, one package per step (floors in docs/architecture.md; imports poi
       linkage/    -> Linkage           planar linkages as data: structure, closure, kinematics, synthesis
       design/     -> Design            direct collocation (transcription/) and its search (search/)
       studies/    -> VerifiedDesign    solve_verified: the design, its servo simulation, its contact
-                                       verification, one status and verdict; sweeps, impact, trade-off
+                                       verification, one status and verdict; sweeps, impact, trade-off;
+                                       the study runner (tasks on dask.distributed)
       files/      -> design.json, cam tables (and back)
       report/     -> text, JSON, figures, HTML (formats what it is given)
 
@@ -51,6 +52,7 @@ from .contact.studies import sweep_spm, tolerance_study
 from .contact.verify import design_verification, verification, verify
 from .contact.cluster import Cluster, build_cluster, softest_stiffness
 from .studies.sweeps import impact_study
+from .studies.runner import StudyRunner
 from .motion.stroke import Kinematics, Piece, StrokeFunction
 from .motion.timing import Interval, TimingDiagram
 from .drive.transmission import BeltPulley, ScrewLever, SliderCrank, Transmission, gt3_pitch_diameter
@@ -66,7 +68,7 @@ __all__ = [
     "OBJECTIVES", "Design", "DesignSettings", "Mesh", "compare_with_laws", "design_text", "mesh_study", "read_design",
     "solve_design", "sweep_design",
     "AccuracyResult", "DriveAxis", "ServoErrorTerm", "ServoSettings", "accuracy_report", "axis_from_problem", "handover_accuracy",
-    "tradeoff", "VerifiedDesign", "solve_verified", "verify_design",
+    "tradeoff", "VerifiedDesign", "solve_verified", "verify_design", "StudyRunner",
     "Cluster", "build_cluster", "design_verification", "impact_study", "softest_stiffness", "verification",
 ]
 __version__ = "0.1.0"
