@@ -237,10 +237,11 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
             drive = copy(drive)
             drive.load = with_model_springs(drive.load, found)
         if drive is not None:
-            radius = None if nlp.graph.radius is None else float(nlp.value(nlp.graph.radius, x).item())
+            dm = nlp.graph.drive_model
+            radius = None if dm.radius is None else float(nlp.value(dm.radius, x).item())
             motor = choice.motor
             if choice.candidates:
-                pick = nlp.value(nlp.graph.pick, x).ravel()
+                pick = nlp.value(dm.pick, x).ravel()
                 motor = choice.candidates[int(np.argmax(pick))]
             checks = drive_checks_fine(drive, motor, choice.teeth, radius, req.problem, rated.spm, rated.moves,
                                        sols, settings.check_points, choice.belt_teeth)

@@ -89,6 +89,20 @@ class DriveModel:
     pin_torques: list = field(default_factory=list)  # pinned torques [tau_ref] (refine.pins_in_place)
     sum_sq: Any = 0.0  # integral of (torque/tau_ref)^2 over the moves, divided by the period
     dwell_sq: Any = 0.0
+    torques: list = field(default_factory=list)  # each move's torque at its hull points and pins [tau_ref]
+    dwell_torques: list = field(default_factory=list)  # each dwell's torque at rest [tau_ref]
+    pick: Any = None  # the Bonmin motor weights
+    discrete: tuple | None = None  # (variable name, size) of the integer variables
+
+    @property
+    def move_sq(self):
+        """Integral of (torque/tau_ref)^2 over the moves, over the period (min_energy)."""
+        return self.sum_sq
+
+    @property
+    def mean_sq(self):
+        """(RMS torque / tau_ref)^2 over the cycle, dwells included (min_rms_torque, the RMS limit)."""
+        return self.sum_sq + self.dwell_sq
 
     @classmethod
     def build(cls, g) -> "DriveModel":
@@ -109,11 +123,12 @@ class DriveModel:
             trans = BeltPulley(2 * radius, inertia)
         pct = drive.limits.peak_limit_pct / 100
         reserve = req.settings.torque_reserve
+        pick, discrete = None, None
         if choice.candidates:
             cands = choice.candidates
             pick = b.var("motor", (len(cands), 1), 0.0, 1.0, [1.0] + [0.0] * (len(cands) - 1))
             b.constrain("one motor", ca.sum1(pick) - 1.0, 0.0, 0.0)
-            g.discrete, g.pick = ("motor", len(cands)), pick
+            discrete = ("motor", len(cands))
 
             def mix(values):
                 return ca.dot(pick, ca.DM(values))
@@ -143,7 +158,6 @@ class DriveModel:
             rated = b.param("rated torque", lambda r: r.choice.motor.rated_torque)
             speed = b.param("rated speed", lambda r: r.choice.motor.rated_speed)
             motor_name = m.name  # for messages: a relaxed build (which names them) is never reused
-        g.radius = radius
         if rated is None:
             peak_what = (f"peak_torque (pull-out torque at standstill / safety factor "
                          f"{drive.limits.pull_out_safety_factor:g}, {motor_name}: {'%.3g' % peak_num} N m"
@@ -155,6 +169,7 @@ class DriveModel:
         period = b.param("period", lambda r: r.period) * g.time_scale
         out = cls(radius, r_ref, inertia, trans, rotor, peak_lim, rated, speed, peak_num, rated_num, speed_num,
                   motor_name, peak_what, drive.tau_ref, period)
+        out.pick, out.discrete = pick, discrete
         if rated is None:
             out.pull_out = pull_out_function(choice.motor, drive.limits)
         return out
@@ -195,7 +210,7 @@ class DriveModel:
         self.pin_values.append(ca.vec(pin_t) / self.peak_lim)
         self.pin_torques.append(ca.vec(pin_t) / self.tau_ref)
         self.pin_forces.append(ca.vec(pin_f))
-        g.torques.append(tau)
+        self.torques.append(tau)
         self.v.append(v)
 
     def dwells(self, g) -> None:
@@ -210,7 +225,7 @@ class DriveModel:
             terms = load_torque(self.rotor, self.trans, g.load, ca.MX(itv.start_position), ca.MX(0.0),
                                 ca.MX(0.0))
             t_d = terms.total / self.tau_ref
-            g.dwell_torques.append(t_d)
+            self.dwell_torques.append(t_d)
             self.forces.append(terms.load_force)
             share = b.param(f"dwell {itv.index} share",
                             lambda r, i=itv.index - 1: r.schedule.duration[i] / r.schedule.period)

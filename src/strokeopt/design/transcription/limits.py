@@ -104,12 +104,12 @@ class PeakTorque(Limit):
             return
         lim = LimitGroup(f"peak torque move {mv.index}", dm.peak_what, dm.peak_num, "N m",
                          lambda sig, pl=dm.peak_num, tr=dm.tau_ref: pl + sig * tr, mv.index, "peak_torque")
-        g.built.limit_abs(lim, g.torques[k] * (dm.tau_ref / dm.peak_lim))
+        g.built.limit_abs(lim, dm.torques[k] * (dm.tau_ref / dm.peak_lim))
 
     def on_cycle(self, g):
         dm = g.drive_model
-        if g.dwell_torques and not dm.stepper:
-            tau_d = ca.vertcat(*g.dwell_torques)
+        if dm.dwell_torques and not dm.stepper:
+            tau_d = ca.vertcat(*dm.dwell_torques)
             lim = LimitGroup("peak torque dwells", dm.peak_what + " holding in the dwells", dm.peak_num, "N m",
                              lambda sig, pl=dm.peak_num, tr=dm.tau_ref: pl + sig * tr, None, "peak_torque")
             g.built.limit_abs(lim, tau_d * (dm.tau_ref / dm.peak_lim))
@@ -146,7 +146,7 @@ class PullOut(Limit):
         if not dm.stepper:
             return
         n = dm.torque_omega[k].shape[1]
-        tau = g.torques[k][:, :n] * dm.tau_ref
+        tau = dm.torques[k][:, :n] * dm.tau_ref
         avail = dm.pull_out(dm.torque_omega[k])
         sf = g.request.drive.limits.pull_out_safety_factor
         what = f"pull_out_torque (torque demand under the pull-out curve / safety factor {sf:g}, {dm.motor_name})"
@@ -161,8 +161,8 @@ class PullOut(Limit):
 
     def on_cycle(self, g):
         dm = g.drive_model
-        if dm.stepper and g.dwell_torques:  # holding at rest: the curve at standstill
-            tau_d = ca.vertcat(*g.dwell_torques) * (dm.tau_ref / dm.peak_lim)
+        if dm.stepper and dm.dwell_torques:  # holding at rest: the curve at standstill
+            tau_d = ca.vertcat(*dm.dwell_torques) * (dm.tau_ref / dm.peak_lim)
             lim = LimitGroup("pull-out torque dwells", dm.peak_what + " holding in the dwells", dm.peak_num, "N m",
                              lambda sig, pl=dm.peak_num, tr=dm.tau_ref: pl + sig * tr, None, "pull_out_torque",
                              enforced=lambda r: r.settings.enforce_pull_out)
@@ -193,14 +193,12 @@ class RmsTorque(Limit):
 
     def on_cycle(self, g):
         dm = g.drive_model
-        g.move_sq = dm.sum_sq
-        g.mean_sq = dm.sum_sq + dm.dwell_sq  # (RMS torque / tau_ref)^2
         if dm.rated is None:  # a stepper: no rated torque to hold (its current does not follow the load)
             return
         lim = LimitGroup("RMS torque", f"rms_torque (RMS torque, {dm.motor_name}: rated torque)", dm.rated_num,
                          "N m", lambda sig, r=dm.rated_num, tr=dm.tau_ref: math.sqrt(r**2 + sig * tr**2), None,
                          "rms_torque")
-        g.built.limit(lim, g.mean_sq - (dm.rated / dm.tau_ref) ** 2)
+        g.built.limit(lim, dm.mean_sq - (dm.rated / dm.tau_ref) ** 2)
 
 
 #: the objectives that read the integral of torque squared (:class:`RmsTorque`)
@@ -308,5 +306,5 @@ def build_drive(g) -> None:
         lim.on_cycle(g)
     g.pin_values = ca.vertcat(*dm.pin_values) if dm.pin_values else None
     if dm.pin_torques:  # the largest pinned torque over the largest torque of the cycle (refine.pins_in_place)
-        peak = ca.mmax(ca.fabs(ca.vertcat(*[ca.vec(t) for t in g.torques + g.dwell_torques])))
+        peak = ca.mmax(ca.fabs(ca.vertcat(*[ca.vec(t) for t in dm.torques + dm.dwell_torques])))
         g.pin_share = ca.mmax(ca.fabs(ca.vertcat(*dm.pin_torques))) / ca.fmax(peak, 1e-12)

@@ -164,15 +164,8 @@ class Graph:
     f: Any = None  # the expression the solver minimises (the cost's, or the relaxed build's slack sum)
     cost: Any = None  # the objective's Cost (objectives.py): its measure, unit and transform to SI
     solvers: dict = field(default_factory=dict)
-    # the drive (see limits.build_drive)
+    # the drive (see limits.build_drive): its radius, motor, torques and their squares are the DriveModel's
     drive_model: Any = None
-    radius: Any = None
-    pick: Any = None  # the Bonmin motor weights
-    discrete: tuple | None = None  # (variable name, size) of the integer variables
-    torques: list = field(default_factory=list)
-    dwell_torques: list = field(default_factory=list)
-    mean_sq: Any = None
-    move_sq: Any = None
     pin_values: Any = None  # the pinned points' torques and forces, relative to their limits
     pin_share: Any = None  # the largest pinned torque over the largest torque of the cycle
     pin_motions: dict = field(default_factory=dict)  # (move, position) -> (weight, v, a) at the pin (pins.pin_motion)

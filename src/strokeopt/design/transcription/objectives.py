@@ -82,25 +82,25 @@ def min_peak_torque(g):
     Z = b.var("peak_torque", (n * len(moves) + 1, 1), 0.0, np.inf, 1.0)
     b.constrain("peak torque chain", Z[1:] - Z[:-1], 0.0, 0.0)
     d1 = mesh.degree + 1
-    for k, (mv, tau) in enumerate(zip(moves, g.torques)):
+    for k, (mv, tau) in enumerate(zip(moves, g.drive_model.torques)):
         zk = Z[k * n:(k + 1) * n]
         zrow = ca.horzcat(ca.repmat(zk, d1, 1).T, ca.repmat(zk[0], 1, tau.shape[1] - n * d1))
         b.constrain(f"peak torque epigraph move {mv.index}", ca.vertcat((zrow - tau).T, (zrow + tau).T),
                     0.0, np.inf)
-    if g.dwell_torques:
-        tau_d = ca.vertcat(*g.dwell_torques)
+    if g.drive_model.dwell_torques:
+        tau_d = ca.vertcat(*g.drive_model.dwell_torques)
         b.constrain("peak torque epigraph dwells", ca.vertcat(Z[-1] - tau_d, Z[-1] + tau_d), 0.0, np.inf)
     return Cost(Z[0] + _smoothing(g), "N m", lambda f, r: f * tau_ref, Z[0])
 
 
 def min_rms_torque(g):
     tau_ref = g.drive_model.tau_ref
-    return Cost(g.mean_sq, "N m", lambda f, r: math.sqrt(max(f, 0.0)) * tau_ref)
+    return Cost(g.drive_model.mean_sq, "N m", lambda f, r: math.sqrt(max(f, 0.0)) * tau_ref)
 
 
 def min_energy(g):
     tau_ref = g.drive_model.tau_ref
-    return Cost(g.move_sq, "N^2 m^2 s", lambda f, r: f * tau_ref**2 * r.period)
+    return Cost(g.drive_model.move_sq, "N^2 m^2 s", lambda f, r: f * tau_ref**2 * r.period)
 
 
 def min_time(g):

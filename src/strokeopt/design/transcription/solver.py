@@ -171,9 +171,10 @@ def _solve(nlp, options: dict, x0=None):
             opts.update({"bonmin.print_level": 0, "bonmin.bb_log_level": 0, "bonmin.nlp_log_level": 0,
                          "bonmin.fp_log_level": 0, "bonmin.lp_log_level": 0, "bonmin.milp_log_level": 0,
                          "bonmin.oa_log_level": 0})
-            if g.discrete is not None:
+            found = None if g.drive_model is None else g.drive_model.discrete
+            if found is not None:
                 discrete = np.zeros(w.shape[0], dtype=bool)
-                offset, count = b.offsets[g.discrete[0]]
+                offset, count = b.offsets[found[0]]
                 discrete[offset:offset + count] = True
                 opts["discrete"] = discrete.tolist()
         solver = ca.nlpsol("design", plugin, {"x": w, "f": g.f, "g": gs, "p": p}, opts)
