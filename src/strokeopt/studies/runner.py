@@ -242,12 +242,13 @@ def run_on_client(client, step, items: list, shared, *, progress=None, chained: 
         done = _Completed(futures, client.loop)
         for _ in (progress(done) if progress is not None else done):
             pass
+        rows = {k: client.submit(_without_warm, fut, pure=False, key=f"strokeopt-{token}-{k}-row")
+                for k, fut in enumerate(futures) if fut.status == "finished"}
         outcomes = []
         for k, (fut, item) in enumerate(zip(futures, items)):
-            if fut.status == "finished":
+            if k in rows:
                 try:
-                    outcomes.append(client.submit(_without_warm, fut, pure=False,
-                                                  key=f"strokeopt-{token}-{k}-row").result())
+                    outcomes.append(rows[k].result())
                     continue
                 except Exception as exc:  # noqa: BLE001  (its worker died between the two)
                     error = exc
@@ -274,7 +275,8 @@ def _future_error(fut) -> BaseException:
 def connected(runner: StudyRunner, tasks: int | None = None):
     """A ``distributed.Client`` on the runner's cluster: a LocalCluster of ``runner.workers`` processes (at most
     ``tasks``) started here and closed on leaving, or the scheduler at ``runner.scheduler`` (ProblemError, one
-    line, when it cannot be reached within :data:`CONNECT_TIMEOUT_S`, has no worker or a worker lacks strokeopt)."""
+    line, when it cannot be reached within :data:`CONNECT_TIMEOUT_S`, is no Dask scheduler, has no worker or a
+    worker lacks strokeopt)."""
     if runner.scheduler is None:
         from distributed import Client, LocalCluster
 
