@@ -93,13 +93,17 @@ def test_a_peak_that_is_not_converged_is_named(problem):
                for k in m["unconverged_peaks"])
 
 
-def test_the_text_report_says_whether_the_peaks_converged(reference_path, capsys):
-    assert main(["simulate", str(reference_path), "--scene", "release", "--plot", "none"]) == 0
-    out = capsys.readouterr().out
-    assert "peak forces converged: estimated error at most" in out
-    assert main(["simulate", str(reference_path), "--scene", "release", "--plot", "none", "--rtol", "1e-3",
-                 "--atol", "1e-4"]) == 0
-    assert "peak forces NOT CONVERGED: k3" in capsys.readouterr().out
+def test_the_json_report_says_whether_the_peaks_converged(reference_path, capsys):
+    import json
+
+    args = ["simulate", str(reference_path), "--scene", "release", "--plot", "none", "--json"]
+    assert main(args) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["peak_forces_converged"] is True and data["unconverged_peaks"] == []
+    assert set(data["peak_contact_force_errors_pct"]) == set(data["peak_contact_forces_N"])
+    assert main(args + ["--rtol", "1e-3", "--atol", "1e-4"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["peak_forces_converged"] is False and "k3" in data["unconverged_peaks"]
 
 
 HARD = [  # tests/test_simulate.py's hard cases, and the reference at 600 spm
