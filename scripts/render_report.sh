@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# Make docs/report-example.pdf and docs/report-example.png (its first page) from the reference design:
+# Make docs/report-example.pdf and docs/report-example.png (its first page) from the reference design, and
+# docs/report-knitting.png (its first four pages, two by two) from the knitting machine's fastest design
+# (a stepper on a screw and lever, an elastic chain, no handover: the report follows the machine):
 # `strokeopt solve --out` writes the design report, headless Chromium (Debian: apt-get install chromium)
-# prints it to PDF, and its first page becomes the PNG (pdftoppm, Debian: poppler-utils).
+# prints it to PDF, and its first page(s) become the PNG (pdftoppm, Debian: poppler-utils).
 #   scripts/render_report.sh                      # python3 and chromium from PATH
 #   PYTHON=/path/to/python CHROMIUM=/usr/bin/chromium scripts/render_report.sh
 set -euo pipefail
@@ -27,4 +29,23 @@ else
         --screenshot="$PWD/docs/report-example.png" "$url" 2>"$work/png.log" || { cat "$work/png.log" >&2; exit 1; }
 fi
 cp "$work/out/report.html" docs/report-example.html
-ls -l docs/report-example.pdf docs/report-example.png docs/report-example.html
+
+# the knitting machine: its min_time design (the default objective breaks the stepper's pull-out curve)
+PYTHONPATH="$PWD/src${PYTHONPATH:+:$PYTHONPATH}" "$PYTHON" -m strokeopt solve problems/knitting_stitch_density.toml \
+    --objective min_time --out "$work/knit" --plot none
+"$CHROMIUM" "${flags[@]}" --no-pdf-header-footer --print-to-pdf="$work/knit.pdf" "file://$work/knit/report.html" \
+    2>"$work/knit.log" || { cat "$work/knit.log" >&2; exit 1; }
+if command -v pdftoppm >/dev/null; then
+    pdftoppm -png -r 70 -f 1 -l 4 "$work/knit.pdf" "$work/knit-page"
+    "$PYTHON" - "$work" <<'PY'
+import glob, sys
+from PIL import Image  # matplotlib's own dependency
+pages = [Image.open(p).convert("RGB") for p in sorted(glob.glob(sys.argv[1] + "/knit-page*.png"))]
+w, h = pages[0].size
+out = Image.new("RGB", (2 * w, h * ((len(pages) + 1) // 2)), "white")
+for i, p in enumerate(pages):
+    out.paste(p, ((i % 2) * w, (i // 2) * h))
+out.save("docs/report-knitting.png", optimize=True)
+PY
+fi
+ls -l docs/report-example.pdf docs/report-example.png docs/report-example.html docs/report-knitting.png

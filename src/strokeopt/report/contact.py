@@ -66,9 +66,17 @@ def scene_text(problem, scene: str, summary: dict) -> str:
             f"({s['belt']}), which 'strokeopt solve' and 'size' check the rigid-load belt tension against"
             if s.get("belt_breaking_load_N") is not None else "")
     lines.append(f"peak force the drive supplies to the {sc.driven}: {s['peak_drive_force_N']:.1f} N (a stiff-contact "
-                 f"spike of the contact model at one grid point, not a sustained belt load{belt})")
-    lines.append("peak element forces [N] (stiff-contact spikes on the output grid, no limit applies): "
+                 f"spike of the contact model, microseconds long, not a sustained belt load{belt})")
+    lines.append("peak element forces [N] (located between the output points, no limit applies): "
                  + ", ".join(f"{k} {v:.1f}" for k, v in s["peak_contact_forces_N"].items()))
+    errors = {**(s.get("peak_contact_force_errors_pct") or {}), "drive": s.get("peak_drive_force_error_pct")}
+    if any(v is not None for v in errors.values()):
+        known = {k: v for k, v in errors.items() if v is not None}
+        worst = max(known, key=known.get)
+        lines.append((f"peak forces NOT CONVERGED: " + ", ".join(f"{k} ({errors[k]:.3g} %)" if errors[k] is not None else k
+                                                             for k in s["unconverged_peaks"]) + " above 5 %; tighten --rtol"
+                      if s["unconverged_peaks"] else f"peak forces converged: estimated error at most {known[worst]:.2g} % "
+                      f"({worst})") + "; each peak's output interval integrated again at 1/100 of the tolerances")
     if s.get("drive"):
         lines.append(drive_text(s["drive"]) + "; the contact model takes the stroke as given and models neither "
                      "the motor nor the belt")
@@ -122,22 +130,41 @@ def verification_text(block: dict) -> str:
     return f"{table}\n{block['verdict']}"
 
 
-def plot_scene(r, path=None):
-    """Driven and follower velocities and the remaining gap N over the cam angle; impact and release marked."""
+def _angular_bodies(problem) -> set:
+    """The bodies of ``problem``'s model on an angular coordinate (their positions in rad)."""
+    model = getattr(problem, "model", None) if problem is not None else None
+    return {n for n, b in (model.bodies.items() if model is not None else ()) if getattr(b, "angular", False)}
+
+
+def plot_scene(r, path=None, problem=None, window=None):
+    """Velocities and positions of the scene's bodies and the remaining gap N (else the drive force) over the
+    whole cam cycle; impact, lag end and release marked. One quantity and one unit per axis: with ``problem``,
+    bodies on an angular coordinate (a lever) get their own axes in rad/s and mrad. ``window``: (from, to)
+    cam angles of a detail instead of the whole cycle."""
+    from .figures import PRINT_WIDTH_IN, legend_outside
+
     ang = r.angle_deg
     m = r.metrics
-    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(9, 8), constrained_layout=True)
+    angular = _angular_bodies(problem) & set(r.positions)
+    linear = [b for b in r.velocities if b not in angular]
+    rows = 3 + (2 if angular else 0)
+    fig, axes = plt.subplots(rows, 1, sharex=True, figsize=(PRINT_WIDTH_IN, 2.0 * rows + 0.5), constrained_layout=True)
     ax = axes[0]
-    for b in r.velocities:
+    for b in linear:
         ax.plot(ang, r.problem_velocity(b), lw=1.2 if b == r.driven else 1.0,
                 label=b + (" (driven)" if b == r.driven else ""))
     ax.set_ylabel(frame_label("velocity", "m/s"))
-    ax.legend(fontsize=8, loc="best")
     ax = axes[1]
-    for b in r.positions:
+    for b in linear:
         ax.plot(ang, r.problem_position(b) * 1e3, lw=1.0, label=b)
     ax.set_ylabel(frame_label("position", "mm"))
-    ax = axes[2]
+    if angular:
+        for b in angular:
+            axes[2].plot(ang, r.velocities[b], lw=1.0, label=b)
+            axes[3].plot(ang, r.positions[b] * 1e3, lw=1.0, label=b)
+        axes[2].set_ylabel("angular velocity\n[rad/s]")
+        axes[3].set_ylabel("angle [mrad]")
+    ax = axes[-1]
     if r.remaining_gap is not None:
         ax.plot(ang, r.remaining_gap * 1e3, color="tab:purple", label=f"remaining gap N (N = {m['gap_N_mm']:g} mm)")
         ax.axhline(0, color="0.5", lw=0.6)
@@ -145,21 +172,36 @@ def plot_scene(r, path=None):
     else:
         ax.plot(ang, r.drive_force, color="tab:gray", label="drive force")
         ax.set_ylabel("drive force [N]")
-    # the event lines are named in the legends (placed clear of the data), not by text on the curves
+    # the event lines are named in the legends (placed beside the data), not by text on the curves
     for ax in axes:
         ax.grid(True, alpha=0.3)
         for key, color, text in (("lag_end_angle_deg", "tab:orange", "lag end"), ("impact_angle_deg", "tab:red", "impact"),
                                  ("release_angle_deg", "tab:green", "release")):
             if m.get(key) is not None:
                 ax.axvline(m[key], color=color, ls="--", lw=1, label=f"{text} {m[key]:.1f} deg")
-    axes[0].legend(fontsize=8, loc="best")
-    axes[2].legend(fontsize=8, loc="best")
-    lo = m.get("lag_onset_angle_deg") or 0.0
-    axes[-1].set_xlim(max(0.0, min(lo, 20.0) - 5), 90.0)
-    axes[-1].set_xlabel("cam angle [deg] (360 deg = one cam cycle)")
+    for ax in axes:
+        if ax is not axes[1] or angular:
+            legend_outside(ax)
+    if window is None:
+        axes[-1].set_xlim(float(ang[0]), float(ang[-1]))
+        axes[-1].set_xticks(np.arange(0, 361, 45))
+        axes[-1].set_xlabel("cam angle [deg] (360 deg = one cam cycle)")
+    else:
+        axes[-1].set_xlim(*window)
+        axes[-1].set_xlabel(f"cam angle [deg] (detail of the events, {window[0]:g}-{window[1]:g} deg)")
+        for ax in axes:  # each axis scaled to what the detail shows
+            ax.relim(visible_only=True)
+            lines = [ln for ln in ax.get_lines() if len(np.atleast_1d(ln.get_xdata())) > 2]
+            ys = [np.asarray(ln.get_ydata())[(np.asarray(ln.get_xdata()) >= window[0])
+                                             & (np.asarray(ln.get_xdata()) <= window[1])] for ln in lines]
+            ys = [y for y in ys if y.size]
+            if ys:
+                lo, hi = min(float(y.min()) for y in ys), max(float(y.max()) for y in ys)
+                pad = 0.06 * (hi - lo or 1.0)
+                ax.set_ylim(lo - pad, hi + pad)
     iv = m.get("impact_velocity_m_s")
-    axes[0].set_title(f"scene {r.scene}, {r.stroke_label or 'stroke'} at {r.spm:g} spm: impact "
-                      + (f"{iv:.2f} m/s" if iv is not None else "none"))
+    axes[0].set_title(f"scene {r.scene}, {r.stroke_label or 'stroke'} at {r.spm:g} spm"
+                      + (f": impact {iv:.2f} m/s" if iv is not None else ""))
     if path is not None:
         fig.savefig(path, dpi=120)
         plt.close(fig)
@@ -230,8 +272,11 @@ def plot_tolerance_study(study: dict, path=None):
 
 
 def plot_chain(r, problem, stroke, path=None):
-    """A model on a transmission's members: each staged free body's acceleration against the rigid
-    chain's (its member's, from the stroke), and the links' forces, over the time of the moves."""
+    """A model on a transmission's members over the whole cam cycle: each staged free body's acceleration
+    against the rigid chain's (its member's, from the stroke), one axis per body (its own unit), and the
+    links' forces, one axis per unit (N for links between sliding bodies, N m for a lever's torsion)."""
+    from .figures import PRINT_WIDTH_IN, legend_outside
+
     model = problem.model
     tr = model.transmission
     sc = problem.scenes[r.scene]
@@ -239,26 +284,32 @@ def plot_chain(r, problem, stroke, path=None):
     rigid = tr.stage_kinematics(kin.s, kin.v, kin.a, kin.j)
     free = [b for b in sc.free_bodies if model.bodies[b].stage is not None]
     links = [e for e in sc.elements if model.elements[e].kind == "link"]
-    fig, axes = plt.subplots(len(free) + 1, 1, sharex=True, figsize=(10, 2.4 * (len(free) + 1)),
+    by_unit: dict = {}
+    for e in links:
+        angular = any(model.bodies[b].angular for b in model.elements[e].bodies if b in model.bodies)
+        by_unit.setdefault("N m" if angular else "N", []).append(e)
+    rows = len(free) + len(by_unit)
+    fig, axes = plt.subplots(rows, 1, sharex=True, figsize=(PRINT_WIDTH_IN, 1.75 * rows + 0.8),
                              constrained_layout=True)
-    ms = r.t * 1e3
+    ang = r.angle_deg
     for ax, b in zip(axes, free):
         body = model.bodies[b]
         unit = "rad/s$^2$" if body.angular else "m/s$^2$"
-        ax.plot(ms, r.accelerations[b], lw=0.9, label=f"{b} (elastic)")
-        ax.plot(ms, rigid[body.stage][2], "k--", lw=1.0, label=f"rigid chain ({body.stage})")
-        ax.set_ylabel(f"{b}\n[{unit}]")
+        ax.plot(ang, r.accelerations[b], lw=0.9, label=f"{b} (elastic)")
+        ax.plot(ang, rigid[body.stage][2], "k--", lw=1.0, label=f"rigid chain ({body.stage})")
+        ax.set_ylabel(f"{b} acc.\n[{unit}]")
+        legend_outside(ax)
+    for ax, (unit, names) in zip(axes[len(free):], by_unit.items()):
+        for e in names:
+            ax.plot(ang, np.asarray(r.forces[e]), lw=0.9, label=e)
+        ax.set_ylabel(("link torque" if unit == "N m" else "link force") + f"\n[{unit}] (+ compr.)")
+        ax.axhline(0, color="0.5", lw=0.6)
+        legend_outside(ax)
+    for ax in axes:
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7, loc="upper right")
-    ax = axes[-1]
-    for e in links:
-        angular = any(model.bodies[b].angular for b in model.elements[e].bodies if b in model.bodies)
-        scale, unit = (100.0, "N cm") if angular else (1.0, "N")
-        ax.plot(ms, np.asarray(r.forces[e]) * scale, lw=0.9, label=f"{e} [{unit}]")
-    ax.set_ylabel("link force\n(+ compression)")
-    ax.set_xlabel("time [ms]")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7, loc="upper right")
+    axes[-1].set_xlim(float(ang[0]), float(ang[-1]))
+    axes[-1].set_xticks(np.arange(0, 361, 45))
+    axes[-1].set_xlabel(f"cam angle [deg] (360 deg = one cycle of {r.period * 1e3:.1f} ms)")
     axes[0].set_title(f"{problem.name}: scene {r.scene!r}, {r.stroke_label}: elastic chain against the rigid chain",
                       fontsize=10)
     if path is not None:

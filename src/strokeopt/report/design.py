@@ -103,7 +103,9 @@ def feasible_text(row: dict) -> str:
 
 def _pulley_text(design: Design) -> str:
     if design.pitch_diameter is None:  # the problem's own transmission (a screw and lever): nothing chosen
-        return f"none: the problem's {design.problem.transmission.name}"
+        from .machine import machine_of
+
+        return f"none (the problem's {machine_of(design.problem).transmission})"
     return (f"{design.pulley_teeth} teeth" if design.pulley_teeth is not None
             else "continuous radius (design.pulley = \"continuous\": no catalogue tooth count)")
 
@@ -115,7 +117,8 @@ def design_text(design: Design, comparison: list[dict] | None = None) -> str:
              f"solved in {design.solve_time_s:.2f} s, mesh {design.mesh.intervals} x degree {design.mesh.degree})",
              f"objective {design.objective}: {format_value(design.objective_value)} {design.objective_unit}"]
     if design.motor is not None:
-        lines.append(f"motor {design.motor}; pulley {_pulley_text(design)}" + (
+        kind = " (stepper)" if getattr(design.motor_spec, "kind", "servo") == "stepper" else ""
+        lines.append(f"motor {design.motor}{kind}; pulley {_pulley_text(design)}" + (
             "" if design.pitch_diameter is None else f", pitch diameter {design.pitch_diameter * 1e3:.2f} mm"))
     lines.append("")
     lines.append(format_table([{**m.to_dict(), "duration_ms": f"{m.duration * 1e3:.3f}"} for m in design.moves],
@@ -154,7 +157,11 @@ def design_text(design: Design, comparison: list[dict] | None = None) -> str:
             cols.append(("vs_optimal_pct", f"{design.objective} vs optimal %"))
         cols.append(("feasible_text", "feasible"))
         lines.append("")
-        motor = f" with {design.motor}, {_pulley_text(design)}" if design.motor else ""
+        from .machine import machine_of
+
+        motor = "" if not design.motor else (
+            f" with {design.motor}, {_pulley_text(design)}" if design.pitch_diameter is not None
+            else f" with {design.motor} on the problem's {machine_of(design.problem).transmission}")
         shown = [{**r, "feasible_text": feasible_text(r)} for r in comparison]
         lines.append(format_table(shown, cols, title=f"comparison with the classic laws{motor}"))
         if any(not r.get("feasible", True) for r in comparison):

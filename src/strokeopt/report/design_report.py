@@ -20,13 +20,33 @@ from typing import Any
 import numpy as np
 
 from . import html as h
+from .figures import PRINT_WIDTH_IN, legend_outside
 from .format import format_value, period_text
+from .machine import ELASTIC_CHAIN, NEEDLE_BAR, Machine, drive_text, machine_of
 
-#: The report's sections: (id, heading), in the order of the data flow.
-SECTIONS = [("problem", "Problem and timing diagram"), ("stroke", "Stroke: bar and motor"),
+#: The report's sections: (id, heading), in the order of the data flow; a report shows those its machine has
+#: (:func:`sections_for`), with headings in the machine's words.
+SECTIONS = [("problem", "Problem and timing diagram"), ("stroke", "Stroke: output and motor"),
             ("drive", "Drive: torque, speed and checks"), ("accuracy", "Handover accuracy"),
             ("verification", "Contact-model verification"), ("numerics", "Numerical accuracy"),
             ("inputs", "Inputs and versions")]
+
+
+def sections_for(machine: Machine) -> list[tuple[str, str]]:
+    """The sections a report of ``machine`` has, each headed in its words: no handover accuracy without a
+    handover, no contact verification without a contact model; an elastic chain's verification is its link
+    forces and its accelerations against the rigid chain."""
+    heads = dict(SECTIONS)
+    heads["stroke"] = f"Stroke: {machine.output} and motor"
+    if machine.stepper:
+        heads["drive"] = "Drive: torque demand, pull-out curve and checks"
+    if machine.scene == ELASTIC_CHAIN:
+        heads["verification"] = "Elastic chain: link forces and accelerations against the rigid chain"
+    elif machine.scene == NEEDLE_BAR:
+        heads["verification"] = "Contact-model verification: impact, lag, gap and release"
+    keep = [sid for sid, _ in SECTIONS if not (sid == "accuracy" and not machine.handover)
+            and not (sid == "verification" and machine.scene is None)]
+    return [(sid, heads[sid]) for sid in keep]
 
 
 @dataclass
@@ -42,6 +62,11 @@ class ReportData:
     versions: dict = field(default_factory=dict)
     created: str = ""
     source: str = ""  # where the design comes from: 'solved now' or the design file
+    verification: dict | None = None  # the contact verification block of the design's scene (criteria, verdict)
+
+    @property
+    def machine(self) -> Machine:
+        return machine_of(self.problem, self.design)
 
 
 def versions() -> dict:
@@ -66,36 +91,39 @@ def gather(verified, summary: dict, source: str = "solved now") -> ReportData:
     problem = verified.problem
     left = [n for n in (problem.scenes or {}) if n not in verified.scenes]
     return ReportData(problem, verified.design, summary, verified.accuracy, dict(verified.scenes), left, versions(),
-                      datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC"), source)
+                      datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC"), source,
+                      getattr(verified, "verification", None))
 
 
 # --------------------------------------------------------------------------- figures
 
 
 def plot_timing(problem, stroke, spm: float):
-    """The timing diagram: the bar position over the cam angle (top axis: time), dwells shaded, every
-    interval named."""
+    """The timing diagram: the output's position over the cam angle (top axis: time), dwells shaded, every
+    interval named, the handover (if the machine has one) dashed."""
     import matplotlib.pyplot as plt
 
     from .figures import frame_label, shade_dwells
+    from .machine import machine_of
 
+    output = machine_of(problem).output
     sch = problem.timing.schedule(spm)
-    fig, ax = plt.subplots(figsize=(9, 3.0), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=(PRINT_WIDTH_IN, 2.9), constrained_layout=True)
     k = stroke.sample(1441)
     ax.plot(360 * k.t / stroke.period, k.s * 1e3, lw=1.4, color="tab:blue")
     shade_dwells(ax, problem.timing, spm)
     for itv, a0, a1 in zip(problem.timing.intervals, sch.start_angle_deg, sch.end_angle_deg):
         ax.axvline(a0, color="0.6", lw=0.6)
         ax.text((a0 + a1) / 2, 0.5, str(itv.index), transform=ax.get_xaxis_transform(), ha="center", va="center",
-                fontsize=9, color="0.3")
+                fontsize=9, color="0.3", bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.8})
     move = problem.timing.handover_move
     if move is not None:
         ax.axvline(sch.end_angle_deg[move.index - 1], color="tab:red", ls="--", lw=1, label="handover")
-        ax.legend(fontsize=8, loc="lower right")
+        legend_outside(ax)
     ax.set_xlim(0, 360)
-    ax.set_xticks(np.arange(0, 361, 30))
+    ax.set_xticks(np.arange(0, 361, 45))
     ax.set_xlabel("cam angle [deg] (numbers: the intervals of the table)")
-    ax.set_ylabel(frame_label("bar position", "mm"))
+    ax.set_ylabel(frame_label(f"{output} position", "mm"))
     ms = stroke.period * 1e3 / 360.0
     sec = ax.secondary_xaxis("top", functions=(lambda a: a * ms, lambda t: t / ms))
     sec.set_xlabel("time [ms]")
@@ -103,40 +131,53 @@ def plot_timing(problem, stroke, spm: float):
     return fig
 
 
+def motor_scale(problem, design) -> tuple[float, str]:
+    """The motor's coordinate per unit of the output's [rad/m] and how it was found: the pulley radius, or a
+    transmission's ratio at the output's zero (a screw and lever's changes by less than 0.1 % over a
+    stitch-cam step)."""
+    if design.radius:
+        return 1.0 / design.radius, f"output over the pulley radius {design.radius * 1e3:.3f} mm"
+    mu = float(np.ravel(problem.transmission.transfer(np.zeros(1))[1])[0])
+    return 1.0 / mu, f"output over the {machine_of(problem).transmission}'s ratio at 0 mm ({mu * 1e3:.4g} mm/rad)"
+
+
 def plot_stroke(problem, design, law_stroke):
-    """Position, velocity, acceleration and jerk of the bar (left axes) and of the motor (right axes:
-    the same curves over the pulley radius), the optimal stroke against the problem's law."""
+    """Position, velocity, acceleration and jerk of the output (left axes) and of the motor (right axes:
+    the same curves over the pulley radius or the transmission's ratio), the optimal stroke against the
+    problem's law."""
     import matplotlib.pyplot as plt
 
     from .motion import draw_kinematics
 
-    fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 8.5), constrained_layout=True)
+    fig, axes = plt.subplots(4, 1, sharex=True, figsize=(PRINT_WIDTH_IN, 7.8), constrained_layout=True)
     draw_kinematics(list(axes), problem, [design.stroke, law_stroke], design.spm, n=1441)
-    # the motor over the bar: the pulley radius, or a transmission's ratio mu at 0 mm (a screw and lever's
-    # changes by less than 0.1 % over a stitch-cam step: the axis is that ratio's)
-    r = design.radius if design.radius else float(np.ravel(problem.transmission.transfer(np.zeros(1))[1])[0])
-    jerk_scale = 1e-3 if axes[3].get_ylabel().startswith("bar jerk [km") else 1.0
-    for ax, (label, f) in zip(axes, [("motor angle [deg]", 1e-3 / r * 180 / math.pi),
-                                     ("motor speed [rpm]", 60 / (2 * math.pi) / r),
-                                     ("motor acc. [krad/s$^2$]", 1e-3 / r),
-                                     ("motor jerk [Mrad/s$^3$]", 1e-6 / r / jerk_scale)]):
+    per_m, _ = motor_scale(problem, design)
+    jerk_scale = 1e-3 if "[km" in axes[3].get_ylabel() else 1.0
+    for ax, (label, f) in zip(axes, [("motor angle [deg]", 1e-3 * per_m * 180 / math.pi),
+                                     ("motor speed [rpm]", 60 / (2 * math.pi) * per_m),
+                                     ("motor acc. [krad/s$^2$]", 1e-3 * per_m),
+                                     ("motor jerk [Mrad/s$^3$]", 1e-6 * per_m / jerk_scale)]):
         sec = ax.secondary_yaxis("right", functions=(lambda y, f=f: y * f, lambda y, f=f: y / f))
         sec.set_ylabel(label, fontsize=8)
     return fig
 
 
 def plot_drive(design):
-    """The torque-speed path over the motor's curves and the torque over the cam angle."""
+    """The torque-speed path over the motor's curves (a servo's peak and rated curves, a stepper's pull-out
+    curve) and the torque over the cam angle by term, one above the other."""
     import matplotlib.pyplot as plt
 
     from ..design.torque import design_torque
     from .drive import draw_torque_speed, draw_torque_terms
 
     t, terms = design_torque(design, samples=1441)
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.6), constrained_layout=True)
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(PRINT_WIDTH_IN, 7.6), constrained_layout=True,
+                                   height_ratios=[1.25, 1])
+    stepper = getattr(design.motor_spec, "kind", "servo") == "stepper"
     draw_torque_speed(ax1, design.motor_spec, terms.omega, terms.total, t, design.problem.drive.limits,
-                      f"{design.motor}: torque-speed path of the cycle")
-    draw_torque_terms(ax2, 360 * t / design.stroke.period, terms, "torque over the cycle, by term")
+                      f"{design.motor}: torque demand over its pull-out curve" if stepper
+                      else f"{design.motor}: torque-speed path of the cycle")
+    draw_torque_terms(ax2, 360 * t / design.stroke.period, terms, "motor torque over the cycle, by term")
     return fig
 
 
@@ -157,31 +198,68 @@ def _interval_rows(problem, spm: float) -> list[list[str]]:
     return rows
 
 
+def _check(s: dict, name: str) -> dict | None:
+    return next((c for c in s.get("checks") or [] if c["name"] == name), None)
+
+
+def _transmission_facts(d: ReportData, m: Machine) -> list[tuple]:
+    """The transmission's rows of the key facts: a pulley's teeth and pitch diameter, a screw and lever's
+    lead and arms."""
+    s, tr = d.summary, d.problem.transmission
+    if m.pulley:
+        return [("transmission", "belt pulley", None), ("pulley teeth", s.get("pulley_teeth"), "pulley_teeth"),
+                ("pulley pitch diameter [mm]", s.get("pulley_pitch_diameter_mm"), "pulley_pitch_diameter_mm")]
+    rows = [("transmission", m.transmission, None)]
+    for label, attr, scale in (("screw lead [mm]", "lead", 1e3), ("lever arm at the nut [mm]", "R0", 1e3),
+                               ("lever arm at the sleeve [mm]", "R0P", 1e3)):
+        if getattr(tr, attr, None) is not None:
+            rows.append((label, getattr(tr, attr) * scale, None))
+    return rows
+
+
 def section_problem(d: ReportData) -> str:
-    p, s = d.problem, d.summary
+    p, s, m = d.problem, d.summary, d.machine
     facts = [("problem", p.name, "problem"), ("objective", s["objective"], "objective"),
              (f"objective value [{s['objective_unit']}]", s["objective_value"], "objective_value"),
-             ("status", s["status"], "status"), ("stitch rate [spm]", s["spm"], "spm"),
-             ("cam cycle [s]", s["cycle_time_s"], "cycle_time_s"), ("motor", s["motor"], "motor"),
-             ("pulley teeth", s["pulley_teeth"], "pulley_teeth"),
-             ("pulley pitch diameter [mm]", s["pulley_pitch_diameter_mm"], "pulley_pitch_diameter_mm"),
-             ("peak torque [N m]", s["peak_torque_N_m"], "peak_torque_N_m"),
-             ("RMS torque [N m]", s["rms_torque_N_m"], "rms_torque_N_m")]
+             ("status", s["status"], "status"), ("verdict", s.get("verdict"), None),
+             ("stitch rate [spm]", s["spm"], "spm"), ("cam cycle [s]", s["cycle_time_s"], "cycle_time_s"),
+             ("motor", s["motor"], "motor"),
+             ("motor kind", ("stepper (pull-out curve, step rate)" if m.stepper else "servo (peak and rated curves)")
+              if m.motor else None, None)]
+    facts += _transmission_facts(d, m)
+    facts += [("peak torque [N m]", s["peak_torque_N_m"], "peak_torque_N_m")]
+    if m.stepper:
+        po, rate = _check(s, "pull_out_torque"), _check(s, "step_rate")
+        facts += [("peak demand / pull-out torque [%]", po and po["value"], None),
+                  ("peak step rate [Hz]", rate and rate["value"], None)]
+    else:
+        facts += [("RMS torque [N m]", s["rms_torque_N_m"], "rms_torque_N_m")]
     head = ["#", "interval", "kind", "law", "stroke mm", "direction", "from deg", "to deg", "from ms", "to ms",
-            "start position mm", ""]
+            "start position mm", "handover"]
+    sch = p.timing.schedule(s["spm"])
+    moves = [i for i in p.timing.intervals if i.is_move]
+    what = (f"{len(moves)} move{'s' if len(moves) != 1 else ''} of "
+            + ", ".join(f"{abs(i.stroke) * 1e3:g} mm {'up' if i.stroke > 0 else 'down'}" for i in moves))
+    handover = p.timing.handover_move
+    hand = (f"; the handover (dashed) ends move {handover.move_index} at {sch.end_angle_deg[handover.index - 1]:.1f} deg"
+            if handover is not None else "; the machine has no handover")
+    caption = (f"Position of the {m.output} over one cam cycle of {s['cycle_time_s'] * 1e3:.1f} ms: {what}; "
+               f"dwells shaded{hand}; top axis: time.")
     return (h.para(f"{p.description} Design {d.source}; {period_text(s['cycle_time_s'], s['spm'])}.")
             + h.key_table(facts) + h.heading("Timing diagram (cam degrees and time)")
             + h.table(head, _interval_rows(p, s["spm"]))
-            + h.svg_figure(plot_timing(p, d.design.stroke, s["spm"]),
-                           "Bar position of the optimal stroke over one cam cycle; dwells shaded, the handover "
-                           "dashed; top axis: time."))
+            + h.svg_figure(plot_timing(p, d.design.stroke, s["spm"]), caption))
+
+
+#: The comparison's columns: (key, header); those no row has a value for are left out.
+COMPARISON_COLUMNS = [("a_max_m_s2", "a_max m/s2"), ("jerk_max_m_s3", "jerk_max m/s3"),
+                      ("peak_torque_N_m", "peak torque N m"), ("rms_torque_N_m", "RMS torque N m"),
+                      ("peak_speed_rpm", "peak speed rpm"), ("pull_out_pct", "pull-out %"),
+                      ("step_rate_Hz", "step rate Hz")]
 
 
 def comparison_table(comparison: list[dict], objective: str, prefix: str = "comparison") -> str:
-    cols = [("a_max_m_s2", "a_max m/s2"), ("jerk_max_m_s3", "jerk_max m/s3")]
-    if comparison and "peak_torque_N_m" in comparison[0]:
-        cols += [("peak_torque_N_m", "peak torque N m"), ("rms_torque_N_m", "RMS torque N m"),
-                 ("peak_speed_rpm", "peak speed rpm")]
+    cols = [(k, head) for k, head in COMPARISON_COLUMNS if any(r.get(k) is not None for r in comparison)]
     if any(r.get("vs_optimal_pct") is not None for r in comparison):  # min_time, min_handover_error: none
         cols.append(("vs_optimal_pct", f"{objective} vs optimal %"))
     rows = []
@@ -192,23 +270,27 @@ def comparison_table(comparison: list[dict], objective: str, prefix: str = "comp
 
 
 def section_stroke(d: ReportData) -> str:
-    s = d.summary
-    moves = [[h.cell(m["index"], f"moves[{i}].index"), h.cell(m["stroke_mm"], f"moves[{i}].stroke_mm"),
-              h.cell(m["direction"]), h.cell(m["duration_s"] * 1e3),
-              h.cell(m["v_max_m_s"], f"moves[{i}].v_max_m_s"), h.cell(m["a_max_m_s2"], f"moves[{i}].a_max_m_s2"),
-              h.cell(m["jerk_max_m_s3"], f"moves[{i}].jerk_max_m_s3"), h.cell(m["C_a"], f"moves[{i}].C_a")]
-             for i, m in enumerate(s["moves"])]
+    s, m = d.summary, d.machine
+    moves = [[h.cell(mv["index"], f"moves[{i}].index"), h.cell(mv["stroke_mm"], f"moves[{i}].stroke_mm"),
+              h.cell(mv["direction"]), h.cell(mv["duration_s"] * 1e3),
+              h.cell(mv["v_max_m_s"], f"moves[{i}].v_max_m_s"), h.cell(mv["a_max_m_s2"], f"moves[{i}].a_max_m_s2"),
+              h.cell(mv["jerk_max_m_s3"], f"moves[{i}].jerk_max_m_s3"), h.cell(mv["C_a"], f"moves[{i}].C_a")]
+             for i, mv in enumerate(s["moves"])]
     law = d.problem.stroke(s["spm"])
-    out = h.svg_figure(plot_stroke(d.problem, d.design, law),
-                       f"The optimal stroke against the problem's law ({law.label}); left axes the bar, right axes "
-                       "the motor (bar over the pulley radius).")
-    out += h.heading("Moves") + h.table(["move", "stroke mm", "direction", "move time ms", "v_max m/s",
-                                         "a_max m/s2", "jerk_max m/s3", "C_a"], moves)
+    _, how = motor_scale(d.problem, d.design)
+    a_opt = max(mv["a_max_m_s2"] for mv in s["moves"])
+    a_law = float(np.max(np.abs(law.sample(1441).a)))
+    caption = (f"The optimal stroke of the {m.output} against the problem's law ({law.label}) over the whole cam "
+               f"cycle: peak |acceleration| {a_opt:.4g} m/s\u00b2 against the law's {a_law:.4g} m/s\u00b2. Left axes: the "
+               f"{m.output}; right axes: the motor ({how}).")
+    out = h.heading("Moves") + h.table(["move", "stroke mm", "direction", "move time ms", "v_max m/s",
+                                        "a_max m/s2", "jerk_max m/s3", "C_a"], moves)
+    out += h.svg_figure(plot_stroke(d.problem, d.design, law), caption)
     if s.get("comparison"):
-        out += h.heading(f"Comparison with the classic laws on the same drive ({s['motor']}, "
-                         f"{s['pulley_teeth']} teeth)") + comparison_table(s["comparison"], s["objective"])
-        out += h.para("Laws marked 'no' break the design problem's constraints (listed last); the laws' handover "
-                      "accuracy is not checked.", "note")
+        out += h.heading(f"Comparison with the classic laws on the same drive ({drive_text(m, s)})") \
+            + comparison_table(s["comparison"], s["objective"])
+        note = "Laws marked 'no' break the design problem's constraints (listed last)"
+        out += h.para(note + ("; the laws' handover accuracy is not checked." if m.handover else "."), "note")
     return out
 
 
@@ -222,7 +304,29 @@ def checks_table(checks: list[dict], prefix: str = "checks") -> str:
     rows = [[h.cell(c["name"]), h.cell(c["value"], f"{prefix}[{i}].value"), h.cell(c["limit"], f"{prefix}[{i}].limit"),
              h.cell(c["unit"]), h.cell(c["margin"], f"{prefix}[{i}].margin"), h.raw_cell(h.verdict(c["ok"]))]
             for i, c in enumerate(checks)]
-    return h.table(["check", "value", "limit", "unit", "margin (1 - value/limit)", ""], rows)
+    return h.table(["check", "value", "limit", "unit", "margin (1 - value/limit)", "result"], rows)
+
+
+def _drive_caption(d: ReportData) -> str:
+    """The drive figure's caption, from the design's numbers and its motor's kind."""
+    s, m = d.summary, d.machine
+    limits = d.problem.drive.limits
+    if m.stepper:
+        po, rate = _check(s, "pull_out_torque"), _check(s, "step_rate")
+        spec = d.design.motor_spec
+        least = (f"its least reserve at {po['value']:.4g} % of the pull-out torque (allowed {po['limit']:.4g} %)"
+                 if po else "")
+        return (f"Top: the torque demand |T| over the cycle against {d.design.motor}'s pull-out curve "
+                f"({getattr(spec, 'source', None) or 'motor data'}) and the curve divided by the safety factor "
+                f"{limits.pull_out_safety_factor:g} (the check), {least}; the peak step rate "
+                + (f"{rate['value']:.0f} Hz against {rate['limit']:.0f} Hz. " if rate else ". ")
+                + "Bottom: the motor torque over the cam angle, by term.")
+    speed = _check(s, "peak_speed")
+    return (f"Top: the cycle's torque-speed path with its peak ({s['peak_torque_N_m']:.3f} N m) and RMS "
+            f"({s['rms_torque_N_m']:.3f} N m) operating points over {d.design.motor}'s peak and rated (continuous) "
+            f"curves, the drive's torque limit and the rated speed"
+            + (f" (peak speed {speed['value']:.0f} of {speed['limit']:.0f} rpm)" if speed else "")
+            + ". Bottom: the motor torque over the cam angle, by term.")
 
 
 def section_drive(d: ReportData) -> str:
@@ -230,17 +334,15 @@ def section_drive(d: ReportData) -> str:
     if d.design.motor_spec is None:
         return h.para("The problem has no [drive] section: no motor, no torque, no drive checks.")
     b = binding_check(s["checks"])
-    out = h.svg_figure(plot_drive(d.design), "Left: the cycle's torque-speed path with its peak and RMS operating "
-                       "points over the motor's peak and rated curves and the drive's torque limit. Right: the "
-                       "torque over the cam angle by term.")
-    out += h.heading("Checks (fine grid between the collocation nodes)") + checks_table(s["checks"])
+    out = h.heading("Checks (fine grid between the collocation nodes)") + checks_table(s["checks"])
     if b is not None:
         out += h.para(f"Binding limit: {b['name']} ({format_value(b['value'])} {b['unit']} against "
                       f"{format_value(b['limit'])} {b['unit']}, margin {100 * b['margin']:.1f} %).")
     out += h.para("Active constraints at the solution: " + ("; ".join(s["active_constraints"]) or "none") + ".")
+    out += h.svg_figure(plot_drive(d.design), _drive_caption(d))
     drive = s.get("drive") or {}
     if drive:
-        out += h.para(f"Motor and pulley from {drive.get('from')}.", "note")
+        out += h.para(f"Motor and {'pulley' if d.machine.pulley else 'transmission'} from {drive.get('from')}.", "note")
     return out
 
 
@@ -253,7 +355,7 @@ def section_accuracy(d: ReportData) -> str:
     c, sc = a["contributions_mm"], a["signed_contributions_mm"]
     rows = [[h.cell("servo tracking"), h.cell(sc["servo_tracking"], "accuracy.signed_contributions_mm.servo_tracking")],
             [h.cell("belt stretch"), h.cell(sc["belt_stretch"], "accuracy.signed_contributions_mm.belt_stretch")],
-            [h.cell("  of it: bar inertia"), h.cell(sc["belt_stretch_inertia"])],
+            [h.cell(f"  of it: {d.machine.output} inertia"), h.cell(sc["belt_stretch_inertia"])],
             [h.cell("  of it: load forces"), h.cell(sc["belt_stretch_forces"])],
             [h.cell("encoder (one count, a bound)"),
              h.cell(c["encoder_quantisation"], "accuracy.contributions_mm.encoder_quantisation")],
@@ -268,29 +370,101 @@ def section_accuracy(d: ReportData) -> str:
                       f"{a['residual_vibration_mm']:.4f} mm; peak torque command {a['peak_torque_command_N_m']:.3f} N m"
                       + (f", ABOVE the torque limit {a['torque_limit_N_m']:.3f} N m: the drive saturates and the "
                          "prediction does not hold." if a["torque_limited"] else "."))
-    out += h.svg_figure(plot_accuracy(d.accuracy, None, d.design.motor),
-                        "Commanded and actual bar position, and the error with its servo and belt parts over the "
-                        "cycle; the handover window shaded.")
+    out += h.svg_figure(plot_accuracy(d.accuracy, None, d.design.motor, output=d.machine.output),
+                        f"Commanded and actual position of the {d.machine.output}, and the error with its servo and "
+                        f"belt parts over the whole cycle; the handover window ({a['handover_window_deg']:g} deg) "
+                        f"shaded: handover error {a['handover_error_mm']:.4f} mm.")
+    return out
+
+
+def _criteria_table(block: dict) -> str:
+    """The verification's criteria: value, limit, and met / FAILED / not judged."""
+    rows = []
+    for r in block["criteria"]:
+        unit = r.get("unit") or ""
+        value = ("yes" if r["value"] else "no") if isinstance(r["value"], bool) else r["value"]
+        limit = "none" if r["limit"] is None else r["limit"]
+        result = {True: h.verdict(True, "met"), False: h.verdict(False, no="FAILED"), None: "not judged"}[r["ok"]]
+        rows.append([h.cell(r["criterion"]), h.cell(value), h.cell(limit), h.cell(unit), h.raw_cell(result)])
+    return h.table(["criterion", "value", "limit", "unit", "result"], rows)
+
+
+def _needle_bar_verification(d: ReportData) -> str:
+    from .contact import plot_scene
+
+    rows, figs = [], ""
+    keys = [("impact_velocity_m_s", "impact m/s"), ("impact_angle_deg", "impact deg"), ("max_lag_mm", "lag mm"),
+            ("lag_onset_angle_deg", "lag from deg"), ("lag_end_angle_deg", "lag end deg"),
+            ("min_gap_N_mm", "min gap N mm"), ("release_angle_deg", "release deg")]
+    for name, r in d.scenes.items():
+        m = r.summary()
+        lag = m.get("max_lag_mm") if m.get("lag") else 0.0
+        values = {**m, "max_lag_mm": lag}
+        premature = m.get("premature_release")
+        rows.append([h.cell(name)] + [h.cell(values.get(k), f"verification.{name}.{k}") for k, _ in keys]
+                    + [h.raw_cell(h.verdict(not premature, "after the impact", "PREMATURE")
+                                  if premature is not None else "no impact")])
+        iv = m.get("impact_velocity_m_s")
+        figs += h.svg_figure(plot_scene(r, problem=d.problem), f"Scene {name} over the whole cam cycle: velocities and positions "
+                             f"of its bodies and the remaining gap N ({m.get('gap_N_mm'):g} mm at rest)"
+                             + (f"; impact {iv:.2f} m/s at {m['impact_angle_deg']:.1f} deg" if iv is not None else "; no impact")
+                             + (f", lag of {lag:.2f} mm from {m['lag_onset_angle_deg']:.1f} deg" if m.get("lag") else ", no lag")
+                             + (f", release at {m['release_angle_deg']:.1f} deg" if m.get("release_angle_deg") is not None else "")
+                             + ".")
+        events = [m.get(k) for k in ("lag_onset_angle_deg", "impact_angle_deg", "release_angle_deg", "lag_end_angle_deg")]
+        events = [a for a in events if a is not None]
+        if events:  # the events take a few degrees of the cycle: a detail beside the whole
+            window = (max(0.0, 5 * math.floor(min(events) / 5) - 10), min(360.0, 5 * math.ceil(max(events) / 5) + 10))
+            figs += h.svg_figure(plot_scene(r, problem=d.problem, window=window),
+                                 f"Scene {name}, detail of the events ({window[0]:g}-{window[1]:g} deg of the cycle "
+                                 f"above), each axis scaled to it.")
+    return h.table(["scene"] + [c for _, c in keys] + ["release"], rows) + figs
+
+
+def _chain_verification(d: ReportData) -> str:
+    from ..contact.chain import chain_results
+    from .contact import plot_chain
+
+    out = ""
+    for name, r in d.scenes.items():
+        chain = chain_results(d.problem, r, d.design.stroke)
+        bodies = [[h.cell(b["label"] or b["body"]), h.cell(b["stage"]), h.cell(b["elastic_peak_accel"]),
+                   h.cell(b["rigid_peak_accel"]), h.cell(b["ratio"]), h.cell(b["unit"])] for b in chain["bodies"]]
+        links = [[h.cell(k["link"]), h.cell(k["peak_compression"]), h.cell(k["peak_tension"]), h.cell(k["unit"]),
+                  h.cell(k["clearance"] * (1e3 if k["unit"] == "N" else 1.0)),
+                  h.cell("mm" if k["unit"] == "N" else "rad")] for k in chain["links"]]
+        worst = max(chain["bodies"], key=lambda b: b["ratio"] or 0.0) if chain["bodies"] else None
+        out += h.heading(f"Scene {name}: peak link forces (positive = compression)")
+        out += h.table(["link", "peak compression", "peak tension", "unit", "play", "play unit"], links)
+        out += h.heading(f"Scene {name}: peak acceleration of each body, the elastic chain against the rigid chain")
+        out += h.table(["body", "member", "elastic peak", "rigid peak", "elastic / rigid", "unit"], bodies)
+        if "screw" in chain:
+            sc = chain["screw"]
+            out += h.para(f"Screw torque from the peak nut force {sc['peak_nut_force_N']:.1f} N: "
+                          f"{sc['screw_torque_N_cm']:.2f} N cm (pitch diameter {sc['screw_diameter_mm']:g} mm, friction "
+                          f"{sc['thread_friction']:g}, flank angle {sc['thread_angle_deg']:g} deg, raising).")
+        forces = ", ".join(f"{k['link']} {k['peak_abs']:.4g} {k['unit']}" for k in chain["links"])
+        caption = (f"Scene {name} over the whole cam cycle: each body's acceleration in the elastic chain against the "
+                   f"rigid chain's (from the stroke), one axis per body and unit, then the link forces by unit "
+                   f"(peaks {forces})"
+                   + (f"; the largest elastic-to-rigid ratio is the {worst['body']}'s, {worst['ratio']:.3g}"
+                      if worst is not None and worst["ratio"] is not None else "") + ".")
+        out += h.svg_figure(plot_chain(r, d.problem, d.design.stroke), caption)
     return out
 
 
 def section_verification(d: ReportData) -> str:
-    from .contact import plot_scene
-
     if not d.scenes:
         return h.para("The problem has no contact model ([model], [scenes.*]): nothing to verify.")
-    rows, figs = [], ""
-    keys = [("impact_velocity_m_s", "impact m/s"), ("impact_angle_deg", "impact deg"), ("lag_end_angle_deg", "lag end deg"),
-            ("min_gap_N_mm", "min gap N mm"), ("release_angle_deg", "release deg")]
-    for name, r in d.scenes.items():
-        m = r.summary()
-        ok = not m.get("premature_release")
-        rows.append([h.cell(name)] + [h.cell(m.get(k), f"verification.{name}.{k}") for k, _ in keys]
-                    + [h.cell(m.get("lag"), f"verification.{name}.lag"),
-                       h.raw_cell(h.verdict(ok, "pass", "FAIL: premature release"))])
-        figs += h.svg_figure(plot_scene(r), f"Scene {name}: velocities, positions and the remaining gap N; "
-                                            "impact and release marked.")
-    out = h.table(["scene"] + [c for _, c in keys] + ["lag", "verdict"], rows) + figs
+    block = d.verification
+    out = ""
+    if block is not None:
+        judged = h.para(f"The design's stroke re-simulated in scene {block['scene']!r} at {block['spm']:g} spm "
+                        f"(contact model, CVODES) and judged:") + _criteria_table(block)
+        if d.summary.get("verdict"):
+            judged += h.para(f"Verdict: {d.summary['verdict']}")
+        out += f'<div class="keep">{judged}</div>'  # the judgement stays with the section's heading
+    out += _chain_verification(d) if d.machine.scene == ELASTIC_CHAIN else _needle_bar_verification(d)
     if d.not_simulated:
         out += h.para("Not simulated here: " + ", ".join(d.not_simulated) + " (add with --scene NAME or --scene all; "
                       "strokeopt verify DESIGN.json --scene NAME).", "note")
@@ -346,8 +520,8 @@ def section_inputs(d: ReportData) -> str:
     sets = list(getattr(p, "overrides", ()))
     drive = d.summary.get("drive") or {}
     facts = [("problem file", str(p.file), None), ("--set", "; ".join(sets) or "none", None),
-             ("motor and pulley of the design", f"{drive.get('motor')}, {drive.get('pulley_teeth')} teeth, from "
-                                                f"{drive.get('from')}" if drive else "-", None),
+             ("drive of the design", f"{drive_text(d.machine, d.summary)}, from {drive.get('from')}" if drive
+              else drive_text(d.machine, d.summary), None),
              ("created", d.created, None)] + [(k, v, None) for k, v in d.versions.items()]
     rows = [[h.cell(k), h.cell(json.dumps(v) if not isinstance(v, str) else f'"{v}"')] for k, v in _flat(p.data)]
     return (h.key_table(facts) + h.heading("The problem as resolved (every value after the --set overrides)")
@@ -360,9 +534,10 @@ def design_report(d: ReportData) -> str:
                 "accuracy": section_accuracy, "verification": section_verification, "numerics": section_numerics,
                 "inputs": section_inputs}
     s = d.summary
-    sections = [(sid, head, builders[sid](d)) for sid, head in SECTIONS]
+    m = d.machine
+    sections = [(sid, head, builders[sid](d)) for sid, head in sections_for(m)]
     title = f"{d.problem.name}: {s['objective']} design at {s['spm']:g} spm"
-    sub = (f"motor {s['motor'] or '(none)'}, pulley {s['pulley_teeth'] or 'continuous'} teeth; status {s['status']}; "
+    sub = (f"{drive_text(m, s)}; status {s['status']}; "
            f"strokeopt {d.versions.get('strokeopt', '')}, {d.created}")
     return h.page(title, sub, sections)
 

@@ -120,33 +120,46 @@ def draw_torque_speed(ax, motor, omega, torque, t, limits, title: str) -> None:
         ax.plot(w * rpm, sign * np.full_like(w, drive_peak), color="tab:red", ls=":",
                 label=f"torque limit {drive_peak:.2f} N m (min of peak, {limits.peak_limit_pct:g} % rated)"
                 if sign > 0 else None)
-    for x in (-m.rated_speed * rpm, m.rated_speed * rpm):
-        ax.axvline(x, color="0.5", lw=0.8, ls="--")
-    omega, torque, t = np.asarray(omega, float), np.asarray(torque, float), np.asarray(t, float)
-    ax.plot(omega * rpm, torque, color="tab:blue", lw=1.2, label="cycle")
-    i = int(np.argmax(np.abs(torque)))
-    ax.plot(omega[i] * rpm, torque[i], "o", color="tab:blue", ms=7,
-            label=f"peak {torque[i]:.3f} N m at {omega[i] * rpm:.0f} rpm")
-    # the RMS torque of the sizing check; the RMS speed by the same rule
-    (_, rms_torque), (_, rms_speed) = (cycle_values(y, omega, omega, t)[:2] for y in (torque, omega))
-    ax.plot(rms_speed * rpm, rms_torque, "D", color="tab:purple", ms=7,
-            label=f"RMS {rms_torque:.3f} N m at {rms_speed * rpm:.0f} rpm (RMS speed)")
+    for x in (-m.rated_speed * rpm, m.rated_speed * rpm):  # the peak_speed check's limit: named in the legend
+        ax.axvline(x, color="0.5", lw=0.8, ls="--",
+                   label=f"\u00b1rated speed {m.rated_speed * rpm:.0f} rpm (peak speed limit)" if x > 0 else None)
+    mark_operating_points(ax, omega, torque, t, "tab:blue", "cycle")
     ax.set_xlabel("motor speed [rpm]")
     ax.set_ylabel("motor torque [N m]")
     ax.set_title(title)
     ax.grid(True, alpha=0.3)
     # below the axes: inside, the legend lies on the curves it names
-    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, frameon=False)
+    from .figures import legend_outside
+
+    legend_outside(ax, where="below", ncol=2)
 
 
-def torque_angle_axis(ax, title: str, fontsize: int = 8) -> None:
-    """An axis of motor torque over the cam angle (one cycle, 45 deg ticks), its legend and title."""
+def mark_operating_points(ax, omega, torque, t, color, name: str) -> None:
+    """One design's torque-speed path (``omega`` [rad/s], ``torque`` [N m] over times ``t``) in ``color``,
+    its peak (circle) and RMS (diamond: the RMS torque of the sizing check at the RMS speed) marked and
+    named with their values."""
+    rpm = 60 / (2 * math.pi)
+    omega, torque, t = np.asarray(omega, float), np.asarray(torque, float), np.asarray(t, float)
+    ax.plot(omega * rpm, torque, color=color, lw=1.2, label=name)
+    i = int(np.argmax(np.abs(torque)))
+    ax.plot(omega[i] * rpm, torque[i], "o", color=color, ms=7, mec="k", mew=0.5,
+            label=f"peak {torque[i]:.3f} N m at {omega[i] * rpm:.0f} rpm")
+    (_, rms_torque), (_, rms_speed) = (cycle_values(y, omega, omega, t)[:2] for y in (torque, omega))
+    ax.plot(rms_speed * rpm, rms_torque, "D", color=color, ms=6, mec="k", mew=0.5,
+            label=f"RMS {rms_torque:.3f} N m at {rms_speed * rpm:.0f} rpm (RMS speed)")
+
+
+def torque_angle_axis(ax, title: str, fontsize: float = 8) -> None:
+    """An axis of motor torque over the cam angle (one cycle, 45 deg ticks), its legend (beside the data) and
+    title."""
+    from .figures import legend_outside
+
     ax.set_xlabel("cam angle [deg]")
     ax.set_ylabel("motor torque [N m]")
     ax.set_xlim(0, 360)
     ax.set_xticks(np.arange(0, 361, 45))
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=fontsize, loc="best")
+    legend_outside(ax, fontsize=fontsize)
     ax.set_title(title)
 
 
@@ -259,4 +272,6 @@ def draw_pull_out(ax, motor, omega, torque, limits, title: str) -> None:
     ax.set_ylabel("|motor torque| [N m]")
     ax.set_title(title, fontsize=10)
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7, loc="best")
+    from .figures import legend_outside
+
+    legend_outside(ax, where="below", ncol=2)

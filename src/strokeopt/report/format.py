@@ -55,8 +55,9 @@ def format_table(rows: list[dict], columns: list[tuple[str, str]], title: str = 
 def drive_text(drive: dict) -> str:
     """The line every report has: which motor and pulley it used and where they come from."""
     teeth = drive.get("pulley_teeth")
+    names = {"screw_lever": "screw and lever", "belt_pulley": "belt pulley"}  # the transmission in words
     pulley = f"pulley {teeth} teeth" if teeth is not None else \
-        drive.get("transmission") or "continuous pulley radius"
+        names.get(drive.get("transmission"), drive.get("transmission")) or "continuous pulley radius"
     return f"drive: motor {drive.get('motor') or '(none)'}, {pulley} (from {drive['from']})"
 
 

@@ -20,7 +20,9 @@ def _scalar(value):
     """A numpy scalar as the Python number it is (JSON's view of it)."""
     return value.item() if hasattr(value, "item") and not isinstance(value, (str, bytes)) else value
 
-#: Screen and print: A4 pages, a page break before every section, tables that do not split rows.
+#: Screen and print: A4 pages (figures are drawn at the printed width, 186 mm); sections follow one another
+#: (the inputs, an appendix, start a page); a heading stays with what follows it, a figure with its caption,
+#: a table whole (one longer than a page splits between rows).
 CSS = """
 body { font-family: "DejaVu Sans", Arial, sans-serif; font-size: 10.5pt; color: #222; max-width: 60em;
        margin: 1.5em auto; padding: 0 1em; line-height: 1.35; }
@@ -32,14 +34,16 @@ th, td { border: 1px solid #bbb; padding: 0.2em 0.5em; text-align: right; vertic
 th { background: #eef0f5; } td.text, th.text { text-align: left; }
 td.better { background: #d9f2d9; font-weight: bold; }
 .ok { color: #176117; font-weight: bold; } .fail { color: #a61b1b; font-weight: bold; }
-.keyfacts td { font-size: 10pt; } figure { margin: 0.5em 0 1em; } figure svg { max-width: 100%; height: auto; }
+.keyfacts td { font-size: 10pt; } .keyfacts th { white-space: nowrap; } .keyfacts td.text { max-width: 34em; } figure { margin: 0.5em 0 1em; } figure svg { max-width: 100%; height: auto; }
 figcaption { font-size: 9pt; color: #444; } nav ol { columns: 2; font-size: 9.5pt; }
+figure, table, tr, figcaption, .keep { break-inside: avoid; page-break-inside: avoid; }
+h2, h3 { break-after: avoid; page-break-after: avoid; }
 pre { font-size: 8pt; background: #f6f6f6; padding: 0.5em; white-space: pre-wrap; }
 .note { font-size: 9pt; color: #444; }
 @page { size: A4; margin: 14mm 12mm; }
 @media print { body { max-width: none; margin: 0; padding: 0; font-size: 9.5pt; }
-  section { break-before: page; } section.first { break-before: avoid; }
-  tr, figure { break-inside: avoid; } h2, h3 { break-after: avoid; } nav { display: none; } }
+  section { break-before: auto; } section#inputs { break-before: page; }
+  h2 { margin-top: 1.0em; } nav { display: none; } figure svg { width: 100%; height: auto; } }
 """
 
 
@@ -101,16 +105,29 @@ def raw_cell(html: str, cls: str = "text") -> str:
     return f'<td class="{cls}">{html}</td>'
 
 
-def table(head: list[str], rows: list[list[str]], cls: str = "") -> str:
-    """A table from header texts and rows of :func:`cell` strings."""
+def _text(html: str) -> str:
+    """A cell's text (its markup removed)."""
+    from html import unescape
+
+    return unescape(re.sub(r"<[^>]+>", "", html)).strip()
+
+
+def table(head: list[str], rows: list[list[str]], cls: str = "", keep_empty: bool = False) -> str:
+    """A table from header texts and rows of :func:`cell` strings; a column no row has a value in (every
+    cell empty or '-') is left out unless ``keep_empty``."""
+    if rows and not keep_empty:
+        keep = [j for j in range(len(head)) if any(_text(r[j]) not in ("", "-") for r in rows if j < len(r))]
+        head = [head[j] for j in keep]
+        rows = [[r[j] for j in keep if j < len(r)] for r in rows]
     th = "".join(f"<th>{escape(h)}</th>" for h in head)
     body = "".join("<tr>" + "".join(r) + "</tr>" for r in rows)
     return f"<table{_cls(cls)}><thead><tr>{th}</tr></thead><tbody>{body}</tbody></table>"
 
 
 def key_table(pairs: list[tuple[str, object, str | None]], cls: str = "keyfacts") -> str:
-    """A two-column table of (label, value, data-key) rows."""
-    rows = [[f'<th class="text">{escape(label)}</th>', cell(value, key)] for label, value, key in pairs]
+    """A two-column table of (label, value, data-key) rows; a value None leaves its row out."""
+    rows = [[f'<th class="text">{escape(label)}</th>', cell(value, key)] for label, value, key in pairs
+            if value is not None]  # a fact the design does not have is not a row
     return f'<table class="{cls}"><tbody>' + "".join("<tr>" + "".join(r) + "</tr>" for r in rows) + "</tbody></table>"
 
 
@@ -118,6 +135,9 @@ def svg_figure(fig, caption: str = "") -> str:
     """A matplotlib figure as inline SVG (text as text, not paths: small and searchable), then closed."""
     import matplotlib.pyplot as plt
 
+    from .figures import fit_titles
+
+    fit_titles(fig)  # no title wider than its axes: nothing clipped at the figure's edge
     buf = io.StringIO()
     with plt.rc_context({"svg.fonttype": "none", "svg.hashsalt": "strokeopt"}):
         fig.savefig(buf, format="svg")  # constrained layout: no second draw for a tight box

@@ -179,9 +179,12 @@ def draw_kinematics(axes, problem, strokes, spm: float, n: int = 3601) -> None:
         angle = 360.0 * k.t / stroke.period
         for ax, y, (_, _, scale) in zip(axes, (k.s, k.v, k.a, k.j), units):
             ax.plot(angle, y * scale, lw=1.4, label=stroke.label)
+    from .machine import machine_of
+
+    output = machine_of(problem).output  # what the stroke moves: the bar, the cam
     for ax, (name, unit, _) in zip(axes, units):
         shade_dwells(ax, problem.timing, spm)
-        ax.set_ylabel(frame_label(f"bar {name}", unit))
+        ax.set_ylabel(frame_label(f"{output} {name}", unit))
         ax.grid(True, alpha=0.3)
         ax.axhline(0, color="0.5", lw=0.6)
     move = problem.timing.handover_move
@@ -199,4 +202,8 @@ def draw_kinematics(axes, problem, strokes, spm: float, n: int = 3601) -> None:
     axes[0].set_title(f"{problem.name}: {stroke_names(strokes)} at {spm:g} spm ({period_text(problem.timing.period(spm), spm)})"
                       + (", dwells shaded" if has_dwell else ""), fontsize=10)
     if len(strokes) > 1:
-        axes[0].legend(loc="best", fontsize=8)
+        from .figures import MIN_TEXT_PT
+
+        handles, labels = axes[0].get_legend_handles_labels()  # above the figure's axes, off the data
+        axes[0].figure.legend(handles, labels, loc="outside upper center", ncol=min(len(labels), 3), frameon=False,
+                              fontsize=MIN_TEXT_PT + 0.5)

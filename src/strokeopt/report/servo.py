@@ -81,33 +81,35 @@ def accuracy_text(report: dict) -> str:
     return "\n".join(lines)
 
 
-def plot_accuracy(result: AccuracyResult, path: str | Path | None = None, motor: str | None = None):
-    """Commanded vs. actual bar position (problem frame), and the error and its parts over the cam angle."""
+def plot_accuracy(result: AccuracyResult, path: str | Path | None = None, motor: str | None = None,
+                  output: str = "bar"):
+    """Commanded vs. actual position of the ``output`` (problem frame), and the error and its parts over the
+    cam angle."""
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(2, 1, sharex=True, figsize=(9, 7), constrained_layout=True)
+    from .figures import PRINT_WIDTH_IN, legend_outside
+
+    fig, axes = plt.subplots(2, 1, sharex=True, figsize=(PRINT_WIDTH_IN, 6.2), constrained_layout=True)
     ang = result.angle_deg
     ax = axes[0]
     ax.plot(ang, result.s_cmd * 1e3, lw=1.4, label="commanded")
-    ax.plot(ang, result.x * 1e3, lw=1.0, ls="--", label="actual (bar)")
-    ax.set_ylabel(frame_label("bar position", "mm"))
-    ax.legend(loc="best", fontsize=8)
+    ax.plot(ang, result.x * 1e3, lw=1.0, ls="--", label=f"actual ({output})")
+    ax.set_ylabel(frame_label(f"{output} position", "mm"))
     ax = axes[1]
-    ax.plot(ang, result.error * 1e3, lw=1.4, color="k", label="bar error (commanded - actual)")
+    ax.plot(ang, result.error * 1e3, lw=1.4, color="k", label=f"{output} error")
     ax.plot(ang, result.servo * 1e3, lw=1.0, label="servo tracking")
     ax.plot(ang, result.belt * 1e3, lw=1.0, label="belt stretch")
     ax.set_ylabel("error [mm]\n(commanded - actual)")
-    ax.legend(loc="best", fontsize=8)
     h_ang = 360.0 * (result.handover_time - result.loop.settings.sum_small_time_constants) / result.period
     for a in axes:
         a.axvline(h_ang, color="tab:red", ls="--", lw=1)
-        a.axvspan(h_ang, h_ang + result.loop.settings.handover_window, color="tab:red", alpha=0.08, lw=0)
+        a.axvspan(h_ang, h_ang + result.loop.settings.handover_window, color="tab:red", alpha=0.08, lw=0,
+                  label=f"handover window, error {result.handover_error * 1e3:.3f} mm" if a is axes[1] else "handover")
         a.grid(True, alpha=0.3)
-    axes[1].annotate(f"handover: {result.handover_error * 1e3:.3f} mm", (h_ang, result.at_handover(result.error) * 1e3),
-                     xytext=(10, 10), textcoords="offset points", color="tab:red")
+        legend_outside(a)
     axes[1].set_xlabel("cam angle [deg] (360 deg = one cam cycle)")
     axes[1].set_xlim(0, 360)
-    axes[1].set_xticks(np.arange(0, 361, 30))
+    axes[1].set_xticks(np.arange(0, 361, 45))
     on = f" on {motor}" if motor else ""
     axes[0].set_title(f"{result.label}{on} at {result.spm:g} spm: handover error {result.handover_error * 1e3:.3f} mm")
     if path is not None:
