@@ -183,3 +183,5 @@ def test_a_tighter_tolerance_gets_a_larger_budget(problem):
     assert sc.step_budget(1e-8) == pytest.approx(10_000_000, rel=1e-6)
     with pytest.raises(SolverError, match="the max_steps option"):
         simulate_scene(problem, "release", 500, options=SimulationOptions(max_steps=20_000))
+    with pytest.raises(SolverError, match="stopped after 20,000 integrator steps"):  # restarted at every switch
+        simulate_scene(problem, "release", 500, options=SimulationOptions(max_steps=20_000, restart_at_switches=True))

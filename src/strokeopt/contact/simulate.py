@@ -100,8 +100,7 @@ class SimulationOptions:
     comparison of the tolerance study. ``integrator_options`` pass straight to ``casadi.integrator``.
     ``verbose``: let SUNDIALS print its own messages (otherwise only the SolverError says why).
     ``max_steps``: the integrator steps the cycle may take (None: the scene's budget at this tolerance,
-    :meth:`~strokeopt.contact.scene.Scene.step_budget`); a scene that needs more stops with a SolverError
-    naming its stiffest contact and the step it forced.
+    :meth:`~strokeopt.contact.scene.Scene.step_budget`); a scene that needs more stops (SolverError).
     """
 
     method: str = "cvodes"
@@ -251,8 +250,7 @@ class CasadiStepper:
         self.segment_steps = 0
 
     def piece(self, k, piece, z, pk):
-        """One stroke piece; stops the scene once its steps pass the budget (one output interval may take the
-        whole budget: the check after the piece then stops it)."""
+        """One stroke piece; stops the scene once its steps pass the budget (one output point may take it all)."""
         integ = self._piece
         try:
             res = integ(x0=z, p=pk)
@@ -465,6 +463,8 @@ def _run(sc, scene, spm, stroke, period, ode, grid, stepper, opts, cpu0) -> Scen
                 sk, xf = _between_switches(ode, stepper.segment, z, pk)
                 sk = np.concatenate([[0.0], sk])
                 nst = stepper.segment_steps - before
+                if steps + nst > getattr(stepper, "budget", math.inf):  # the piece-wise path keeps it too
+                    raise stepper._over_budget(k, piece, {}, nst)
             else:
                 xf, nst = stepper.piece(k, piece, z, pk)
             zk = np.hstack([z[:, None], xf])
