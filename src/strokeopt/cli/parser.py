@@ -291,8 +291,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(run=cmd_tradeoff)
     _report_parsers(sub, problem)
     from .linkage_command import add_linkage_parser
+    from .robust_command import add_robust_parser
 
     add_linkage_parser(sub, problem)
+    add_robust_parser(sub, problem, _drive_options, _study_runner_options, _plot_option)
     return parser
 
 

@@ -1,0 +1,77 @@
+"""The tolerance study as text and figures (:func:`strokeopt.studies.robust.robust_study` makes the data)."""
+
+from __future__ import annotations
+
+from .format import format_table
+
+#: The result columns of the tables: (key, heading).
+COLUMNS = (("handover_error_mm", "handover mm"), ("max_lag_mm", "lag mm"), ("impact_velocity_m_s", "impact m/s"),
+           ("peak_torque", "peak N m"))
+
+
+def robust_text(report: dict) -> str:
+    """Yield with its interval, failures by criterion, the worst samples and the rank correlations."""
+    lo, hi = report["yield_interval"]
+    lines = [f"{report['problem']} at {report['spm']:g} spm: the design's stroke on {report['samples']} sampled "
+             f"machines ({report['method']}, seed {report['seed']})"]
+    lines += [f"  {t['field']}: {t['lower']:.6g} to {t['upper']:.6g} ({t['distribution']}; nominal {t['nominal']:.6g})"
+              for t in report["tolerances"]]
+    lines.append(f"yield: {100 * report['yield']:.1f} % meet every limit the problem sets (95 % interval "
+                 f"{100 * lo:.1f} to {100 * hi:.1f} %)")
+    if report["failed_by"]:
+        lines.append("failed: " + ", ".join(f"{name} in {n} samples" for name, n in
+                                            sorted(report["failed_by"].items(), key=lambda kv: -kv[1])))
+    fields = [t["field"] for t in report["tolerances"]]
+    worst = [{**{f"p{i}": r.get(f) for i, f in enumerate(fields)}, **r,
+              "failed_text": ", ".join(r.get("failed", [])) or "-"} for r in report["worst"]]
+    cols = [("sample", "sample")] + [(f"p{i}", f) for i, f in enumerate(fields)] + \
+        [c for c in COLUMNS if any(c[0] in r for r in worst)] + [("failed_text", "fails")]
+    lines += ["", format_table(worst, cols, title="the worst samples")]
+    sens = report["sensitivity"]
+    cols = [("field", "tolerance")] + [c for c in COLUMNS if any(c[0] in s for s in sens)]
+    lines += ["", format_table(sens, cols, title="which tolerances matter: Spearman rank correlation with each "
+                                                 "result (+1: rises with the part's value, 0: no effect)")]
+    return "\n".join(lines)
+
+
+def plot_robust(report: dict, path, limits: dict | None = None):
+    """Histograms of the handover error and the impact velocity (limits drawn where the problem sets them) and
+    the rank correlations as bars."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    limits = limits or {}
+    rows = report["rows"]
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), layout="constrained")
+    for ax, (key, label) in zip(axes[:2], (("handover_error_mm", "handover error [mm]"),
+                                           ("impact_velocity_m_s", "impact velocity [m/s]"))):
+        values = np.array([r[key] for r in rows if isinstance(r.get(key), (int, float))], float)
+        if values.size:
+            ax.hist(values, bins=min(40, max(8, values.size // 10)), color="#4c72b0")
+        limit = limits.get(key)
+        if limit is not None and values.size and limit <= 2 * values.max():
+            ax.axvline(limit, color="#c44e52", label=f"limit {limit:g}")
+            ax.legend(loc="upper right")
+        elif limit is not None:  # far beyond the samples: named, not drawn (the samples would shrink to a line)
+            ax.set_title(f"limit {limit:g}, {limit / values.max():.1f} x the largest sample" if values.size
+                         else f"limit {limit:g}", fontsize=9)
+        ax.set_xlabel(label)
+        ax.set_ylabel("samples")
+    sens = report["sensitivity"]
+    keys = [k for k, _ in COLUMNS if any(k in s for s in sens)]
+    width = 0.8 / max(1, len(keys))
+    y = np.arange(len(sens))
+    for j, key in enumerate(keys):
+        axes[2].barh(y + j * width, [s.get(key, 0.0) for s in sens], height=width, label=dict(COLUMNS)[key])
+    axes[2].set_yticks(y + width * (len(keys) - 1) / 2, [s["field"].split(".")[-2] + "." + s["field"].split(".")[-1]
+                                                         if s["field"].count(".") else s["field"] for s in sens])
+    axes[2].set_xlim(-1, 1)
+    axes[2].set_xlabel("Spearman rank correlation [-]")
+    axes[2].legend(loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=len(keys), fontsize=8)
+    fig.suptitle(f"{report['problem']}, {report['spm']:g} spm: yield {100 * report['yield']:.1f} % of "
+                 f"{report['samples']} samples")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

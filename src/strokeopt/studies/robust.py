@@ -1,0 +1,243 @@
+"""The tolerance study: will the machines we build meet the limits? (:func:`robust_study`)
+
+A design is verified with the nominal parts. Built parts scatter: a spring's rate, the belt's stiffness, the
+masses, the gaps. :func:`robust_study` samples the scatter of the fields a user names (``--tolerance
+FIELD=±10%``: any numeric field of the problem file, by its ``--set`` path), quasi-randomly (Sobol or Latin
+hypercube from :mod:`scipy.stats.qmc`, seeded, so the same study gives the same numbers), and judges the *same
+stroke* on each sampled machine through the same verification as the solve (:func:`.verified.verify_design`:
+the full servo simulation and the contact scene) plus the drive's torque and belt checks on the sampled load.
+
+The answer: the yield (the share of samples that meet every limit the problem sets, with a 95 % Wilson
+interval), the worst samples with their parameters, and which tolerances matter: Spearman rank correlations of
+each parameter with the handover error, the lag and the impact velocity (a quasi-random sample does not allow
+Sobol indices; rank correlations need no model). The samples are independent tasks on the study runner
+(:mod:`.runner`): the same numbers with one worker or many.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..drive.selection import resolve_drive
+from ..errors import ProblemError
+from .runner import run_study
+from .verified import verify_design
+
+#: Sample designs of :func:`robust_study`.
+METHODS = ("sobol", "lhs")
+#: The fewest and most samples one study takes (a yield from fewer than 8 samples says nothing).
+SAMPLES_RANGE = (8, 100_000)
+#: The largest relative scatter [fraction]: beyond 90 % a part is not the part the design was made for.
+RELATIVE_MAX = 0.9
+
+_TEXT = re.compile(r"^(?P<field>[A-Za-z_][\w.\[\]]*)\s*=\s*(?:±|\+-|\+/-)\s*(?P<value>[0-9.eE+-]+)\s*(?P<pct>%)?"
+                   r"\s*(?::\s*(?P<dist>uniform|normal))?\s*$")
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """The scatter of one numeric field (its ``--set`` path): ``half_width`` either side of the nominal value,
+    relative (a fraction) or absolute (in the field's own unit, as its name says: ``gap_mm``); ``distribution``
+    ``uniform`` over the interval or ``normal`` with the interval as +-3 sigma (clipped to it)."""
+
+    field: str
+    nominal: float
+    half_width: float
+    relative: bool
+    distribution: str = "uniform"
+
+    @property
+    def bounds(self) -> tuple[float, float]:
+        d = abs(self.nominal) * self.half_width if self.relative else self.half_width
+        return self.nominal - d, self.nominal + d
+
+    def value(self, u: float) -> float:
+        """The field's value at the unit sample ``u`` in (0, 1)."""
+        lo, hi = self.bounds
+        if self.distribution == "uniform":
+            return lo + (hi - lo) * u
+        from scipy.stats import norm
+
+        z = float(np.clip(norm.ppf(min(max(u, 1e-12), 1 - 1e-12)), -3.0, 3.0))
+        return self.nominal + z * (hi - lo) / 6.0
+
+    def describe(self) -> str:
+        width = f"±{100 * self.half_width:g} %" if self.relative else f"±{self.half_width:g}"
+        return f"{self.field} = {self.nominal:g} {width} ({self.distribution})"
+
+
+def parse_tolerance(text: str, problem, option: str = "--tolerance") -> Tolerance:
+    """``FIELD=±10%`` (relative), ``FIELD=±0.1`` (absolute, the field's unit), ``...:normal`` (±3 sigma);
+    the field must be a number of the problem, the scatter positive, and both extremes valid values of the
+    field (checked as the problem file checks them: a stiffness that would go negative is refused)."""
+    m = _TEXT.match(str(text))
+    if m is None:
+        raise ProblemError(option, str(text), "expected FIELD=±X% or FIELD=±X (the field's unit), optionally "
+                                              ":normal, e.g. 'model.springs.k2.stiffness_N_m=±10%'")
+    field = m["field"]
+    nominal = _number_at(problem, field, option)
+    try:
+        half = float(m["value"]) / (100.0 if m["pct"] else 1.0)
+    except ValueError:
+        raise ProblemError(option, field, f"{m['value']!r} is not a number") from None
+    if not (math.isfinite(half) and half > 0):
+        raise ProblemError(option, field, f"the scatter must be positive, got {m['value']}")
+    if m["pct"] and half > RELATIVE_MAX:
+        raise ProblemError(option, field, f"±{100 * half:g} % is beyond ±{100 * RELATIVE_MAX:g} %: not the part the "
+                                          "design was made for")
+    tol = Tolerance(field, nominal, half, bool(m["pct"]), m["dist"] or "uniform")
+    for value in tol.bounds:  # both extremes must be values the problem file accepts
+        try:
+            problem.with_overrides([f"{field}={value!r}"])
+        except ProblemError as exc:
+            raise ProblemError(option, field, f"{tol.describe()} reaches {value:g}, which the problem refuses: "
+                                              f"{exc.message}") from None
+    return tol
+
+
+def _number_at(problem, field: str, option: str) -> float:
+    """The number at the ``--set`` path ``field`` of the problem's data, or ProblemError naming it."""
+    from ..io.fields import parse_override
+
+    path, _ = parse_override(f"{field}=0")
+    node = problem.data
+    for seg in path:
+        ok = (isinstance(seg, int) and isinstance(node, list) and 1 <= seg <= len(node)) or \
+             (isinstance(seg, str) and isinstance(node, dict) and seg in node)
+        if not ok:
+            raise ProblemError(option, field, f"no such field in {problem.file}")
+        node = node[seg - 1] if isinstance(seg, int) else node[seg]
+    if isinstance(node, bool) or not isinstance(node, (int, float)):
+        raise ProblemError(option, field, f"is {node!r}, not a number: a tolerance scatters a number")
+    return float(node)
+
+
+def unit_samples(count: int, dims: int, method: str = "sobol", seed: int = 0) -> np.ndarray:
+    """``count`` points in the unit cube of ``dims`` dimensions (scrambled Sobol or Latin hypercube, seeded)."""
+    from scipy.stats import qmc
+
+    if method == "sobol":
+        import warnings
+
+        with warnings.catch_warnings():  # a count that is no power of two: still a well spread sample
+            warnings.simplefilter("ignore", UserWarning)
+            return qmc.Sobol(dims, scramble=True, seed=seed).random(count)
+    return qmc.LatinHypercube(dims, seed=seed).random(count)
+
+
+def robust_study(design, tolerances: list[Tolerance], samples: int = 1000, *, seed: int = 0, method: str = "sobol",
+                 runner=None, progress=None) -> dict:
+    """The tolerance study of ``design`` (a solved or read-back :class:`~strokeopt.design.result.Design`):
+    ``samples`` machines drawn from ``tolerances``, each judged with the design's stroke. Returns ``{"yield",
+    "yield_interval", "samples", "failed_by", "worst", "sensitivity", "rows", "tolerances", ...}``."""
+    if not tolerances:
+        raise ProblemError("--tolerance", "", "name at least one tolerance, e.g. "
+                                              "--tolerance 'model.springs.k2.stiffness_N_m=±10%'")
+    if not SAMPLES_RANGE[0] <= samples <= SAMPLES_RANGE[1]:
+        raise ProblemError("--samples", "", f"must lie in [{SAMPLES_RANGE[0]}, {SAMPLES_RANGE[1]}], got {samples}")
+    if method not in METHODS:
+        raise ProblemError("--method", "", f"{method!r} is not one of {', '.join(METHODS)}")
+    u = unit_samples(samples, len(tolerances), method, seed)
+    items = [(k, tuple(t.value(float(x)) for t, x in zip(tolerances, row))) for k, row in enumerate(u)]
+    outcomes = run_study(_sample_step, items, (design, tuple(tolerances)), runner=runner, progress=progress,
+                         chained=False)
+    rows = [{"sample": o.item[0], **{t.field: v for t, v in zip(tolerances, o.item[1])},
+             **(o.row if o.ok else {"ok": False, "failed": ["error"], "error": o.error})} for o in outcomes]
+    return summarise(rows, tolerances, design, method, seed)
+
+
+def _sample_step(shared, item, warm):
+    """One sampled machine: the design's stroke on the problem with the sampled values (a runner step)."""
+    design, tolerances = shared
+    _, values = item
+    return judge_sample(design, [f"{t.field}={v!r}" for t, v in zip(tolerances, values)]), None
+
+
+def judge_sample(design, overrides: list[str]) -> dict:
+    """The design's stroke on its problem with ``overrides``: handover error, lag, impact velocity, premature
+    release, peak torque and belt checks, ``ok`` when every judged limit holds and ``failed`` naming the rest."""
+    problem = design.problem.with_overrides(overrides)
+    drive = None if design.drive is None else resolve_drive(
+        problem, motor=design.drive.actuator, pulley_teeth=design.pulley_teeth, pitch_diameter=design.pitch_diameter,
+        include_pulley_inertia=getattr(design.settings, "include_pulley_inertia", True))
+    sampled = replace(design, problem=problem, drive=drive, verification=None, status="optimal")
+    verified = verify_design(sampled)
+    row, failed = {}, []
+    if verified.accuracy is not None:
+        limit = design.settings.accuracy if design.settings is not None else None
+        row["handover_error_mm"] = verified.accuracy.handover_error * 1e3
+        if limit is not None and verified.accuracy.handover_error > limit:
+            failed.append("handover accuracy")
+    for c in (verified.verification or {}).get("criteria", []):
+        key = {"lag": "max_lag_mm", "impact velocity": "impact_velocity_m_s",
+               "premature release": "premature_release"}.get(c["criterion"])
+        if key is not None:
+            row[key] = c["value"]
+        if c["ok"] is False and c["criterion"] != "handover accuracy":
+            failed.append(c["criterion"])
+    for check in _drive_checks(sampled):
+        if check.name in ("peak_torque", "belt_tension", "rms_torque"):
+            row[f"{check.name}"] = float(check.value)
+            if not check.ok:
+                failed.append(check.name)
+    row.update(ok=not failed, failed=failed)
+    return row
+
+
+def _drive_checks(design) -> list:
+    """The drive package's checks of the design's stroke on its (sampled) drive; none without a drive."""
+    if design.drive is None or design.drive.actuator is None:
+        return []
+    from ..drive.checks import drive_checks
+
+    d = design.drive
+    k = design.stroke.sample(2001)
+    return drive_checks(d.actuator, d.transmission, design.problem.drive.load, k.t, k.s, k.v, k.a, limits=d.limits,
+                        belt=d.belt, grooves=design.pulley_teeth or design.problem.drive.teeth_min)
+
+
+def wilson_interval(successes: int, n: int, z: float = 1.959964) -> tuple[float, float]:
+    """The 95 % Wilson score interval of a yield ``successes / n``."""
+    if n == 0:
+        return 0.0, 1.0
+    p = successes / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+#: The results a sensitivity is given for (the ones the scatter moves and a limit may judge).
+RESPONSES = ("handover_error_mm", "max_lag_mm", "impact_velocity_m_s", "peak_torque")
+
+
+def summarise(rows: list[dict], tolerances: list[Tolerance], design, method: str, seed: int) -> dict:
+    """Yield with its interval, failures by criterion, the five worst samples, rank correlations."""
+    from scipy.stats import spearmanr
+
+    n = len(rows)
+    good = sum(1 for r in rows if r.get("ok"))
+    lo, hi = wilson_interval(good, n)
+    failed_by: dict[str, int] = {}
+    for r in rows:
+        for name in r.get("failed", []):
+            failed_by[name] = failed_by.get(name, 0) + 1
+    sens = []
+    for t in tolerances:
+        x = np.array([r[t.field] for r in rows], float)
+        entry = {"field": t.field}
+        for key in RESPONSES:
+            y = np.array([r.get(key, np.nan) for r in rows], float)
+            ok = np.isfinite(y)
+            if ok.sum() >= 8 and np.ptp(y[ok]) > 0 and np.ptp(x[ok]) > 0:
+                entry[key] = float(spearmanr(x[ok], y[ok]).statistic)
+        sens.append(entry)
+    worst = sorted(rows, key=lambda r: (len(r.get("failed", [])), r.get("handover_error_mm", 0.0)), reverse=True)[:5]
+    return {"status": "ok", "problem": design.problem.name, "spm": design.spm, "samples": n, "method": method,
+            "seed": seed, "tolerances": [{"field": t.field, "nominal": t.nominal, "lower": t.bounds[0],
+                                          "upper": t.bounds[1], "distribution": t.distribution} for t in tolerances],
+            "yield": good / n if n else 0.0, "yield_interval": [lo, hi], "failed_by": failed_by,
+            "worst": worst, "sensitivity": sens, "rows": rows}
