@@ -140,6 +140,14 @@ def test_scheduler_address_is_checked_like_a_field(capsys, address):
                                                f"tcp://HOST:PORT (e.g. tcp://127.0.0.1:8786), got {address!r}")
 
 
+def test_solve_help_says_where_a_study_runs(capsys):
+    with pytest.raises(SystemExit):
+        main(["solve", "--help"])
+    out = " ".join(capsys.readouterr().out.split())
+    assert "--workers N worker processes for a sweep (--spm START:STOP:STEP) or --study impact, 1 to 256" in out
+    assert "--scheduler tcp://HOST:PORT" in out and "STROKEOPT_SCHEDULER" in out
+
+
 def test_runner_options_belong_to_a_study(capsys):
     assert main(["solve", str(MIN_JERK), "--plot", "none", "--workers", "2"]) == 2
     assert "--workers: is for a sweep (--spm START:STOP:STEP) or --study impact" in capsys.readouterr().err
