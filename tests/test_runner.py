@@ -215,12 +215,13 @@ def _dask_command() -> list[str]:
     return [found]
 
 
-@pytest.fixture
-def dask_cluster(tmp_path):
+@pytest.fixture(scope="module")
+def dask_cluster(tmp_path_factory):
     """``dask scheduler`` and two ``dask worker`` processes on 127.0.0.1, as a user starts them; stopped (terminate,
-    then kill) when the test ends, passed or failed."""
+    then kill) when the tests that use it end, passed or failed."""
     from distributed import Client
 
+    tmp_path = tmp_path_factory.mktemp("dask")
     dask = _dask_command()
     port = _free_port()
     address = f"tcp://127.0.0.1:{port}"
@@ -254,3 +255,21 @@ def dask_cluster(tmp_path):
 def test_a_sweep_on_a_dask_cluster_gives_the_one_worker_table(capsys, dask_cluster, one_worker):
     on_cluster = _sweep(capsys, "--scheduler", dask_cluster)
     _same_table({**one_worker, "fastest_feasible_spm": 39.0}, on_cluster)
+
+
+@pytest.mark.slow
+def test_a_tolerance_study_on_a_dask_cluster_gives_the_one_worker_numbers(capsys, dask_cluster, tmp_path,
+                                                                          reference_path):
+    """The samples of a tolerance study are independent: the same numbers wherever they ran."""
+    out = tmp_path / "design"
+    assert main(["solve", str(reference_path), "--spm", "600", "--out", str(out), "--plot", "none", "--json"]) == 0
+    capsys.readouterr()
+    argv = ["robust", str(reference_path), "--design", str(out / "design.json"), "--tolerance",
+            "model.springs.k2.stiffness_N_m=±10%", "--samples", "8", "--seed", "5", "--json", "--plot", "none"]
+    assert main([*argv, "--workers", "1"]) == 0
+    here = json.loads(capsys.readouterr().out)
+    assert main([*argv, "--scheduler", dask_cluster]) == 0
+    there = json.loads(capsys.readouterr().out)
+    assert len(here["rows"]) == 8 and not any(r.get("error") for r in there["rows"])
+    assert there["rows"] == here["rows"] and there["yield"] == here["yield"]
+    assert there["runner"] == f"the Dask cluster at {dask_cluster}"
