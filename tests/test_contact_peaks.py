@@ -185,3 +185,11 @@ def test_a_tighter_tolerance_gets_a_larger_budget(problem):
         simulate_scene(problem, "release", 500, options=SimulationOptions(max_steps=20_000))
     with pytest.raises(SolverError, match="stopped after 20,000 integrator steps"):  # restarted at every switch
         simulate_scene(problem, "release", 500, options=SimulationOptions(max_steps=20_000, restart_at_switches=True))
+
+
+def test_the_text_report_names_a_peak_that_is_not_converged(reference_path, capsys):
+    args = ["simulate", str(reference_path), "--scene", "release", "--plot", "none"]
+    assert main(args) == 0
+    assert "peak forces converged: estimated error at most" in capsys.readouterr().out
+    assert main(args + ["--rtol", "1e-3", "--atol", "1e-4"]) == 0
+    assert "peak forces NOT CONVERGED: k3" in capsys.readouterr().out
