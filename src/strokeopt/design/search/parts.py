@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+from .bounds import prune
 from .refine import Outcome, solve_one
 from ..transcription.objectives import needs_terms
 from ..transcription.request import DriveChoice, SolveRequest
@@ -46,6 +47,13 @@ def choose_parts(req: SolveRequest, progress=None):
     else:
         motors = [drive.fixed_motor()]
     failures = []
+    candidates = len(motors)
+    if settings.prune_catalogue and len(motors) > 1:  # motors a rigid bound rules out: no NLP for them
+        motors, failures = prune(req, motors)
+        if failures:
+            notes.append(f"{len(failures)} of {candidates} motors ruled out before solving (their "
+                         "least peak torque with any pulley exceeds their limit): "
+                         + ", ".join(m.name for m, _ in failures))
     # phase 1: every motor with its own best pulley radius (continuous), or the fixed pulley
     first_pass = []
     for motor in (progress(motors) if progress is not None and len(motors) > 1 else motors):
@@ -89,8 +97,8 @@ def choose_parts(req: SolveRequest, progress=None):
         lines += [f"  {m.name}: {_short(e)}" for m, e in failures]
         raise SolverError("\n".join(lines))
     best, teeth = min(results, key=lambda r: r[0].value)
-    if len(motors) > 1:
-        notes.append(f"motor chosen among {len(motors)} by enumeration ({len(failures)} infeasible): "
+    if candidates > 1:
+        notes.append(f"motor chosen among {candidates} by enumeration ({len(failures)} infeasible): "
                      f"lowest {objective}")
     best.solve_time = total_time
     return best, teeth, notes

@@ -85,6 +85,9 @@ class DesignSettings:
     #: min_time: the relative width of a bracket of rates at which a rate that never settled is capped at its lower
     #: end (refine.solve_free_time; not a file field: the trade-off, which reports on a 10 spm grid, widens it)
     rate_bracket: float = 4e-3
+    #: a catalogue search drops the motors a rigid lower bound of the peak torque rules out before solving
+    #: (search/bounds.py; the answer is the exhaustive search's, faster where most motors cannot make the move)
+    prune_catalogue: bool = True
 
     @property
     def mesh(self) -> Mesh:
@@ -153,10 +156,11 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
     contact = parse_contact(f.table("contact", required=False))
     free = parse_free(f.table("free", required=False))
     pull_out = f.boolean("enforce_pull_out", True)
+    prune_catalogue = f.boolean("prune_catalogue", True)
     f.finish()
     return DesignSettings(objective, n, d, rest, jerk, from_law, accuracy, motor_choice, pulley, zmin, zmax,
                           check_points, check_tol, refinements, pulley_inertia, options, contact, free, pull_out,
-                          reserve, law_spm)
+                          reserve, law_spm, prune_catalogue=prune_catalogue)
 
 
 def parse_free(f) -> tuple:
