@@ -35,11 +35,15 @@ def test_figure_names_follow_the_overrides(tmp_path, monkeypatch):
     from strokeopt.cli.parser import build_parser
 
     parser = build_parser()
-    plain = common._plot_path(parser.parse_args(["simulate", str(REFERENCE)]), "simulate", "release")
-    k2 = common._plot_path(parser.parse_args(["simulate", str(REFERENCE), "--set",
-                                              "model.springs.k2.stiffness_N_m=1240"]), "simulate", "release")
-    k2b = common._plot_path(parser.parse_args(["simulate", str(REFERENCE), "--set",
-                                               "model.springs.k2.stiffness_N_m=1500"]), "simulate", "release")
+
+    def path(argv):
+        args = parser.parse_args(argv)
+        args.typed_overrides = tuple(args.overrides)  # as main() records them
+        return common._plot_path(args, "simulate", "release")
+
+    plain = path(["simulate", str(REFERENCE)])
+    k2 = path(["simulate", str(REFERENCE), "--set", "model.springs.k2.stiffness_N_m=1240"])
+    k2b = path(["simulate", str(REFERENCE), "--set", "model.springs.k2.stiffness_N_m=1500"])
     assert len({plain, k2, k2b}) == 3 and k2.name.startswith(plain.stem + "_set-")
 
 

@@ -184,8 +184,8 @@ def _plot_path(args, command: str, *tags) -> Path | None:
         return None
     stem = Path(args.problem).stem if getattr(args, "problem", None) else "strokeopt"
     parts = [stem, command, *(_slug(t) for t in tags if t not in (None, ""))]
-    sets = list(getattr(args, "overrides", None) or [])
-    if sets:  # a run with --set is another figure: a short digest of the overrides names it
+    sets = list(getattr(args, "typed_overrides", None) or ())
+    if sets:  # a run with --set is another figure: a short digest of the --set texts typed names it
         import hashlib
 
         parts.append("set-" + hashlib.sha1("\n".join(sets).encode()).hexdigest()[:8])

@@ -69,6 +69,7 @@ def main(argv: list[str] | None = None) -> int:
     args, extra = parser.parse_known_args(argv)
     if extra:  # said by the command's own parser: its usage, not the top level's
         command_parser(parser, args.command).error(f"unrecognized arguments: {' '.join(extra)}")
+    args.typed_overrides = tuple(getattr(args, "overrides", None) or ())  # as typed (figure names), before any option adds
     try:
         _check_plot_format(args)
         check_outputs(args)  # an unwritable --out or --plot fails now, not after the work
