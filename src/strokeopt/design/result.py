@@ -113,6 +113,15 @@ class Design:
     #: the free model parameters found ([design.free], design/free.py): one row each
     free_parameters: list = field(default_factory=list)
 
+    def __repr__(self) -> str:  # a line, not pages of collocation coefficients
+        parts = [f"{self.objective} {self.objective_value:.6g} {self.objective_unit}", f"{self.spm:g} spm",
+                 f"{len(self.moves)} moves", f"mesh {self.mesh.intervals}x{self.mesh.degree}"]
+        if self.motor:
+            parts.append(f"motor {self.motor}")
+        if self.pulley_teeth:
+            parts.append(f"pulley {self.pulley_teeth} teeth")
+        return f"Design({self.status}: {', '.join(parts)})"
+
     @property
     def motor_spec(self):
         """The design's motor or stepper (the catalogue entry of the resolved drive), None without a drive."""
