@@ -99,7 +99,10 @@ def format_results(results: list[BenchResult]) -> str:
         lines.append(f"{r.name}: {r.description}")
         for row in r.rows:
             lines.append(f"  {row.label:<48s} {row.seconds * 1e3:10.2f} ms  {row.note}")
-        lines.append(f"  ratio {r.ratio_label}: {r.ratio:.1f}x")
+        if r.ratio != r.ratio:  # NaN: the peer was not measured (not installed): said, not printed as "nanx"
+            lines.append(f"  ratio {r.ratio_label}: not measured (the peer is missing: see the note)")
+        else:
+            lines.append(f"  ratio {r.ratio_label}: {r.ratio:.1f}x")
         if r.target_s is not None:
             verdict = "met" if r.meets_target else "NOT met"
             lines.append(f"  target: under {r.target_s:g} s -> measured {r.measured_s:.3f} s: {verdict}")

@@ -97,12 +97,29 @@ def cmd_bench(args) -> int:
     from ..bench.run import run_benchmarks
     from ..report.format import to_json
 
-    results = run_benchmarks(args.only)
+    if args.list:
+        from ..bench.run import benchmark_names
+
+        names = benchmark_names()
+        if args.json:
+            _emit(to_json({"status": "ok", "benchmarks": [{"name": n, "description": d} for n, d in names]}))
+        else:
+            print("\n".join(f"{n:<28s} {d}" for n, d in names))
+        return 0
+
+    def progress(name, k, n, seconds):  # one line per benchmark on stderr (stdout: the results)
+        print(f"bench {k}/{n} {name}: " + ("running" if seconds is None else f"done in {seconds:.1f} s"),
+              file=sys.stderr, flush=True)
+
+    results = run_benchmarks(args.only, progress)
+    missed = [r.name for r in results if r.meets_target is False]
     if args.json:
-        missed = any(r.meets_target is False for r in results)
         _emit(to_json({"status": "targets missed" if missed else "ok", "benchmarks": [r.as_dict() for r in results]}))
     else:
         print(format_results(results))
+    if missed and args.check:
+        print(f"strokeopt: targets missed: {', '.join(missed)}", file=sys.stderr)
+        return 1
     return 0
 
 

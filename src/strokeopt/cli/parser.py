@@ -200,9 +200,14 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("bench", help="speed benchmarks, each against a reference measured in the same run",
                        description="Run the registered benchmarks (strokeopt/bench/): each times a capability "
                                    "and a reference implementation side by side and prints the ratio and its target.",
-                       epilog="Example: strokeopt bench --only size_catalogue")
-    p.add_argument("--only", action="append", metavar="NAME", help="run only this benchmark (repeatable)")
+                       epilog="Examples: strokeopt bench --list; strokeopt bench --only size_catalogue; "
+                              "strokeopt bench --check (exit 1 when a target is missed)")
+    p.add_argument("--only", action="append", metavar="NAME", help="run only this benchmark (repeatable; the names: "
+                                                                   "--list, or the end of this help)")
+    p.add_argument("--list", action="store_true", help="list the benchmarks (name and what each times) and stop")
+    p.add_argument("--check", action="store_true", help="exit 1 when a benchmark misses its target (for CI)")
     p.add_argument("--json", action="store_true", help="print only JSON on stdout")
+    _with_benchmark_names(p)
     p.set_defaults(run=cmd_bench)
 
     p = sub.add_parser("simulate", parents=[problem],
@@ -344,3 +349,16 @@ def _report_parsers(sub, problem) -> None:
     _integrator_arguments(p)
     p.add_argument("--json", action="store_true", help="print only JSON on stdout (for scripts)")
     p.set_defaults(run=cmd_compare, plot=None, verbose=False)
+
+
+def _with_benchmark_names(p: argparse.ArgumentParser) -> None:
+    """``bench --help`` ends with the benchmarks' names, read only when the help is printed (listing them
+    imports the benchmark modules, which no other command needs)."""
+    plain = p.format_help
+
+    def format_help() -> str:
+        from ..bench.run import benchmark_names
+
+        return plain() + "\nbenchmarks:\n" + "\n".join(f"  {n:<28s} {d}" for n, d in benchmark_names()) + "\n"
+
+    p.format_help = format_help

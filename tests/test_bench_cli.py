@@ -1,0 +1,43 @@
+"""`strokeopt bench` says what it does: names in --help and --list, a progress line per benchmark, --check exits 1
+on a missed target, a missing peer is named instead of a 'nanx' ratio."""
+
+from __future__ import annotations
+
+import json
+
+from strokeopt.bench.registry import BenchResult, BenchRow, format_results
+from strokeopt.cli.main import main
+
+
+def test_help_and_list_name_the_benchmarks(capsys):
+    try:
+        main(["bench", "--help"])
+    except SystemExit as exc:
+        assert exc.code == 0
+    text = capsys.readouterr().out
+    assert "benchmarks:" in text and "simulate_release" in text and "tradeoff_vs_solve" in text
+    assert main(["bench", "--list", "--json"]) == 0
+    names = [b["name"] for b in json.loads(capsys.readouterr().out)["benchmarks"]]
+    assert "size_catalogue" in names and len(names) == len(set(names)) >= 10
+
+
+def test_progress_and_check(capsys, monkeypatch):
+    from strokeopt.bench import registry
+
+    def slow_one():
+        return BenchResult([BenchRow("x", 2.0)], measured_s=2.0, ratio=1.0, ratio_label="a / b")
+
+    monkeypatch.setitem(registry.REGISTRY, "test_missed", registry.Benchmark("test_missed", "a target missed",
+                                                                             1.0, slow_one))
+    assert main(["bench", "--only", "test_missed"]) == 0  # reported, exit 0 without --check
+    out, err = capsys.readouterr()
+    assert "NOT met" in out and "bench 1/1 test_missed: running" in err and "done in" in err
+    assert main(["bench", "--only", "test_missed", "--check"]) == 1
+    assert "targets missed: test_missed" in capsys.readouterr().err
+
+
+def test_a_missing_peer_is_named():
+    r = BenchResult([BenchRow("strokeopt", 0.1)], measured_s=0.1, ratio=float("nan"), ratio_label="rockit / strokeopt",
+                    notes=["rockit not installed"], name="design_vs_rockit", description="d")
+    text = format_results([r])
+    assert "nanx" not in text and "not measured (the peer is missing" in text
