@@ -124,6 +124,8 @@ def reports(reference_verified, tmp_path_factory):
                "contact design": _report(contact, tmp, mp, "contact"),
                "knitting": _report(knitting, tmp, mp, "knitting")}
         out["verified"] = {"reference": reference_verified, "contact design": contact, "knitting": knitting}
+        out["paths"] = {"reference": tmp / "reference.html", "contact design": tmp / "contact.html",
+                        "knitting": tmp / "knitting.html"}
     finally:
         mp.undo()
     return out
@@ -170,10 +172,15 @@ def test_no_table_column_is_empty(reports, name):
 @pytest.mark.parametrize("name", NAMES)
 def test_no_axis_mixes_units_and_angles_have_their_own(reports, name):
     _, figures = reports[name]
+    model = reports["verified"][name].problem.model
+    angular = {b for b, body in model.bodies.items() if body.angular}  # the knitting lever's two arms
+    linear_units = {"m/s", "mm", "m/s$^2$", "m"}
     assert figures
     for f in figures:
         for ax in f["axes"]:
             units = UNIT.findall(ax["ylabel"])
+            if units and units[0] in linear_units:  # no lever angle on a position axis, no rad/s among m/s
+                assert not [lb for lb in ax["lines"] if lb.split()[0] in angular], (name, ax["ylabel"], ax["lines"])
             assert len(set(units)) <= 1, (name, ax["ylabel"])
             # the curves' labels carry no unit of their own beside the axis's (c2 [N] beside c4 [N cm])
             for label in ax["lines"]:
@@ -376,3 +383,89 @@ def test_the_print_checks_catch_a_clipped_title_and_small_text():
     assert not texts_outside(fig2)
     plt.close(fig)
     plt.close(fig2)
+
+
+# --------------------------------------------------------------------------- printed by a real browser
+
+CHROMIUM = Path("/usr/bin/chromium")
+MARGIN_PT = 12 / 25.4 * 72  # the report's @page margin
+
+
+def _print(html: Path, tmp_path: Path) -> list[tuple[float, float, list]]:
+    """``html`` printed by headless Chromium to A4 PDF and read back by poppler: per page its width, height
+    and words with their boxes."""
+    import os
+    import shutil
+    import subprocess
+
+    if not CHROMIUM.exists() or shutil.which("pdftotext") is None:
+        if os.environ.get("CI") == "true":
+            pytest.fail("CI: the print check needs Debian's chromium and poppler-utils (.ci/run installs them)")
+        pytest.skip("no /usr/bin/chromium or pdftotext: apt-get install chromium poppler-utils")
+    pdf, words = tmp_path / (html.stem + ".pdf"), tmp_path / (html.stem + ".bbox.html")
+    flags = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+             "--disable-background-networking", "--disable-component-update", "--disable-sync",
+             f"--user-data-dir={tmp_path / 'profile'}", "--no-pdf-header-footer"]
+    run = subprocess.run([str(CHROMIUM), *flags, f"--print-to-pdf={pdf}", html.absolute().as_uri()],
+                         capture_output=True, text=True, timeout=180)
+    assert run.returncode == 0 and pdf.exists(), run.stderr[-2000:]
+    subprocess.run(["pdftotext", "-bbox", str(pdf), str(words)], check=True, timeout=120)
+    pages = []
+    for page in re.split(r"<page ", words.read_text(encoding="utf-8"))[1:]:
+        w, h = map(float, re.match(r'width="([\d.]+)" height="([\d.]+)"', page).groups())
+        boxes = [(float(a), float(b), float(c), float(d), text) for a, b, c, d, text in re.findall(
+            r'<word xMin="([\d.-]+)" yMin="([\d.-]+)" xMax="([\d.-]+)" yMax="([\d.-]+)">([^<]*)</word>', page)]
+        pages.append((w, h, boxes))
+    return pages
+
+
+@pytest.mark.parametrize("name", NAMES + ["comparison"])
+def test_printed_on_a4_no_text_leaves_the_page(reports, comparison, name, tmp_path):
+    """Every word of the printed report (tables, captions and the figures' SVG text alike) lies inside the
+    A4 page's printable area: nothing is cut at the paper's edge."""
+    if name == "comparison":
+        html = tmp_path / "comparison.html"
+        html.write_text(comparison[0], encoding="utf-8")
+    else:
+        html = reports["paths"][name]
+    pages = _print(html, tmp_path)
+    assert len(pages) >= 3
+    words = 0
+    for i, (w, h, boxes) in enumerate(pages, 1):
+        assert abs(w - 595) < 2 and abs(h - 842) < 2, (w, h)  # A4
+        for x0, y0, x1, y1, text in boxes:
+            assert MARGIN_PT - 3 <= x0 and x1 <= w - MARGIN_PT + 3, (name, i, text, x0, x1)
+            assert 0 <= y0 and y1 <= h, (name, i, text, y0, y1)
+        words += len(boxes)
+    printed = {t for _, _, boxes in pages for *_, t in boxes}
+    assert words > 500 and "[deg]" in printed  # the figures' axis labels are printed as text, and checked
+
+
+def test_a_stepper_comparison_follows_its_machine(reports):
+    """Two knitting designs compared (the same one twice: a tie everywhere): the pull-out curve, each design's
+    point of least reserve, no pulley, no handover section, nothing marked better, figures that survive print."""
+    import strokeopt.report.html as html
+    from strokeopt.cli.common import drive_used
+    from strokeopt.report.compare_report import compare_report
+    from strokeopt.report.design_report import gather
+
+    v = reports["verified"]["knitting"]
+    summary = {**v.summary(), "drive": drive_used(None, v.problem, v.design.motor, v.design.pulley_teeth)}
+    datas = [gather(v, summary, f"read from {name}/design.json") for name in ("a", "b")]
+    figures, original, mp = [], html.svg_figure, pytest.MonkeyPatch()
+    mp.setattr(html, "svg_figure", lambda fig, caption="": (figures.append(_figure_facts(fig, caption)),
+                                                            original(fig, caption))[1])
+    try:
+        text = compare_report(datas)
+    finally:
+        mp.undo()
+    p = Cells()
+    p.feed(text)
+    assert "accuracy" not in p.ids and "verification" in p.ids
+    assert 'class="better"' not in text  # the same design twice: no row has a better value
+    assert "pulley teeth" not in p.rows and "HY200-1713 (stepper), screw and lever" in text
+    assert any(k.startswith("step: peak force of link c4 [N m]") for k in p.rows)
+    labels = " | ".join(lb for f in figures for ax in f["axes"] for lb in ax["lines"])
+    assert "a: least reserve" in labels and "b: least reserve" in labels
+    for f in figures:
+        assert not f["outside"] and f["smallest"][0] >= 7.0 and not any(ax["legend_over_data"] for ax in f["axes"])

@@ -44,6 +44,7 @@ def plot_overlay(datas: list[ReportData], names: list[str]):
     from .motion import draw_kinematics
 
     first = datas[0]
+    names = [n if len(n) <= 28 else "\u2026" + n[-27:] for n in names]  # a legend's names: a path's tail
     strokes = [StrokeFunction(d.design.stroke.period, d.design.stroke.pieces, label=f"{n}: {d.design.objective}")
                for d, n in zip(datas, names)]
     fig = plt.figure(figsize=(PRINT_WIDTH_IN, 8.0), constrained_layout=True)
@@ -51,6 +52,8 @@ def plot_overlay(datas: list[ReportData], names: list[str]):
     axes = [fig.add_subplot(grid[0])]
     axes += [fig.add_subplot(grid[i], sharex=axes[0]) for i in range(1, 4)]
     draw_kinematics(axes, first.problem, strokes, first.design.spm, n=1441)
+    for ax in axes[:-1]:
+        ax.tick_params(labelbottom=False)
     fig_t, (ax_t, ax_w) = plt.subplots(2, 1, figsize=(PRINT_WIDTH_IN, 7.8), constrained_layout=True,
                                        height_ratios=[1, 1.5])
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
@@ -72,12 +75,17 @@ def plot_overlay(datas: list[ReportData], names: list[str]):
             for line in ax_w.get_lines()[-(2 if stepper else 3):]:  # its path and its points
                 line.set_color(color)
                 line.set_label(f"{n}: {line.get_label()}" if line.get_label() != "cycle" else n)
-        elif stepper:
-            rate = np.abs(terms.omega) / d.design.motor_spec.step_angle
-            ax_w.plot(rate, np.abs(terms.total), lw=1.2, color=color, label=n)
-            i = int(np.argmax(np.abs(terms.total)))
-            ax_w.plot(rate[i], abs(terms.total[i]), "o", color=color, ms=7, mec="k", mew=0.5,
-                      label=f"{n}: peak {abs(terms.total[i]):.3f} N m at {rate[i]:.0f} Hz")
+        elif stepper:  # its demand and its point of least reserve, as the first design's
+            from ..drive.checks import pull_out_ratio
+
+            spec = d.design.motor_spec
+            rate, demand = np.abs(terms.omega) / spec.step_angle, np.abs(terms.total)
+            ratio = pull_out_ratio(demand, terms.omega, spec)
+            i = int(np.argmax(ratio))
+            ax_w.plot(rate, demand, lw=1.2, color=color, label=n)
+            ax_w.plot(rate[i], demand[i], "o", color=color, ms=7, mec="k", mew=0.5,
+                      label=f"{n}: least reserve: demand {demand[i]:.3f} N m at {rate[i]:.0f} Hz, "
+                            + (f"{100 * ratio[i]:.0f} % of pull-out" if np.isfinite(ratio[i]) else "beyond the table"))
         else:
             mark_operating_points(ax_w, terms.omega, terms.total, t, color, n)
             for line in ax_w.get_lines()[-2:]:
@@ -115,7 +123,7 @@ def _row(label: str, values: list, key: str | None, better: int = NEITHER, activ
 def _table(names: list[str], rows: list[list[str]]) -> str:
     """A table, a column per design; a row every design has no value in is left out."""
     rows = [r for r in rows if any(h._text(c) not in ("", "-") for c in r[1:])]
-    return h.table(["", *names], rows, keep_empty=True)
+    return h.table(["", *names], rows, cls="compare", keep_empty=True)
 
 
 def _check(d: ReportData, name: str, field: str = "value"):
@@ -160,10 +168,11 @@ def _section_verification(datas: list[ReportData], names: list[str], machine) ->
         rows.append(_row(f"{sc}: min gap N [mm]", [m.get("min_gap_N_mm") for m in ms], None, HIGHER))
         rows.append(_row(f"{sc}: release [deg]", [m.get("release_angle_deg") for m in ms], None))
         rows.append(_row(f"{sc}: premature release", [m.get("premature_release") for m in ms], None))
-    verdicts = [d.summary.get("verdict") for d in datas]
-    if any(verdicts):
-        rows.append(_row("verdict", verdicts, None))
-    return _table(names, rows) if rows else h.para("No contact scenes simulated.")
+    out = _table(names, rows) if rows else h.para("No contact scenes simulated.")
+    for n, d in zip(names, datas):  # a verdict is a sentence: below the table, not in a narrow cell
+        if d.summary.get("verdict"):
+            out += h.para(f"{n}: {d.summary['verdict']}")
+    return out
 
 
 def compare_report(datas: list[ReportData]) -> str:
@@ -192,7 +201,7 @@ def compare_report(datas: list[ReportData]) -> str:
         strokes, f"The designs overlaid over the whole cam cycle: position, velocity, acceleration and jerk of the "
                  f"{machine.output}.")
     if torques is not None:
-        points = ("peak demand (circle)" if machine.stepper else "peak (circle) and RMS (diamond)")
+        points = ("least-reserve (circle)" if machine.stepper else "peak (circle) and RMS (diamond)")
         built["stroke"] += h.svg_figure(
             torques, f"Top: the motor torque of each design over the cycle. Bottom: every design's torque-speed "
                      f"path with its own {points} operating points over {datas[0].design.motor}'s "

@@ -57,13 +57,19 @@ def plot_design(design: Design, law_stroke=None, path=None):
     draw_kinematics(axes, design.problem, strokes, design.spm)
     axes[0].set_title(f"{' vs '.join(s.label for s in strokes)}; {period_text(design.stroke.period, design.spm)}",
                       fontsize=9)
-    what = f"{design.objective}" + (f", motor {design.motor}, pulley {_pulley_text(design)}" if design.motor else "")
+    from .machine import machine_of
+
+    machine = machine_of(design.problem, design)
+    drive = (f", motor {design.motor}, pulley {_pulley_text(design)}" if design.pitch_diameter is not None
+             else f", {machine.drive_words} on the {machine.transmission}")
+    what = f"{design.objective}" + (drive if design.motor else "")
     fig.suptitle(f"{design.problem.name}: optimal stroke ({what}) at {design.spm:g} spm", fontsize=11)
     if path_torque:
         t, terms = path_torque
         limits = design.problem.drive.limits
         draw_torque_speed(fig.add_subplot(grid[:, 1]), design.motor_spec, terms.omega, terms.total, t,
-                          limits, "torque-speed path of the optimal stroke over the cycle")
+                          limits, "torque demand of the optimal stroke over the pull-out curve" if machine.stepper
+                          else "torque-speed path of the optimal stroke over the cycle")
     if path is not None:
         fig.savefig(path, dpi=110)
         plt.close(fig)

@@ -34,7 +34,7 @@ th, td { border: 1px solid #bbb; padding: 0.2em 0.5em; text-align: right; vertic
 th { background: #eef0f5; } td.text, th.text { text-align: left; }
 td.better { background: #d9f2d9; font-weight: bold; }
 .ok { color: #176117; font-weight: bold; } .fail { color: #a61b1b; font-weight: bold; }
-.keyfacts td { font-size: 10pt; } .keyfacts th { white-space: nowrap; } .keyfacts td.text { max-width: 34em; } figure { margin: 0.5em 0 1em; } figure svg { max-width: 100%; height: auto; }
+table.compare th.text { min-width: 13em; } .keyfacts td { font-size: 10pt; } .keyfacts th { white-space: nowrap; } .keyfacts td.text { max-width: 34em; } figure { margin: 0.5em 0 1em; } figure svg { max-width: 100%; height: auto; }
 figcaption { font-size: 9pt; color: #444; } nav ol { columns: 2; font-size: 9.5pt; }
 figure, table, tr, figcaption, .keep { break-inside: avoid; page-break-inside: avoid; }
 h2, h3 { break-after: avoid; page-break-after: avoid; }

@@ -202,8 +202,7 @@ def draw_kinematics(axes, problem, strokes, spm: float, n: int = 3601) -> None:
     axes[0].set_title(f"{problem.name}: {stroke_names(strokes)} at {spm:g} spm ({period_text(problem.timing.period(spm), spm)})"
                       + (", dwells shaded" if has_dwell else ""), fontsize=10)
     if len(strokes) > 1:
-        from .figures import MIN_TEXT_PT
+        from .figures import legend_outside
 
-        handles, labels = axes[0].get_legend_handles_labels()  # above the figure's axes, off the data
-        axes[0].figure.legend(handles, labels, loc="outside upper center", ncol=min(len(labels), 3), frameon=False,
-                              fontsize=MIN_TEXT_PT + 0.5)
+        # below the cam-angle axis, off the data (each axis carries the strokes' labels)
+        legend_outside(axes[-1], where="below", ncol=min(len(strokes), 3))
