@@ -203,6 +203,9 @@ def plot_scene(r, path=None, problem=None, window=None):
     axes[0].set_title(f"scene {r.scene}, {r.stroke_label or 'stroke'} at {r.spm:g} spm"
                       + (f": impact {iv:.2f} m/s" if iv is not None else ""))
     if path is not None:
+        from .figures import fit_titles
+
+        fit_titles(fig)  # no title wider than its axes
         fig.savefig(path, dpi=120)
         plt.close(fig)
     return fig
@@ -230,6 +233,9 @@ def plot_sweep(rows: list[dict], path=None):
     axes[0].set_title(f"scene {rows[0]['scene']}, {rows[0].get('stroke') or 'stroke'}: speed sweep" if rows
                       else "speed sweep")
     if path is not None:
+        from .figures import fit_titles
+
+        fit_titles(fig)  # no title wider than its axes
         fig.savefig(path, dpi=120)
         plt.close(fig)
     return fig
@@ -266,6 +272,9 @@ def plot_tolerance_study(study: dict, path=None):
     fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=8)  # below the plots, off the data
     fig.suptitle(f"work-precision, scene {study['scene']} at {study['spm']:g} spm")
     if path is not None:
+        from .figures import fit_titles
+
+        fit_titles(fig)  # no title wider than its axes
         fig.savefig(path, dpi=120)
         plt.close(fig)
     return fig
@@ -313,6 +322,9 @@ def plot_chain(r, problem, stroke, path=None):
     axes[0].set_title(f"{problem.name}: scene {r.scene!r}, {r.stroke_label}: elastic chain against the rigid chain",
                       fontsize=10)
     if path is not None:
+        from .figures import fit_titles
+
+        fit_titles(fig)  # no title wider than its axes
         fig.savefig(path, dpi=110)
         plt.close(fig)
     return fig

@@ -32,6 +32,9 @@ def plot_mesh_study(rows: list[dict], path=None):
         ax.legend(fontsize=8)
     axes[0].set_title("what accuracy costs in time (labels: mesh intervals)")
     if path is not None:
+        from .figures import fit_titles
+
+        fit_titles(fig)  # no title wider than its axes
         fig.savefig(path, dpi=120)
         plt.close(fig)
     return fig
@@ -71,6 +74,9 @@ def plot_design(design: Design, law_stroke=None, path=None):
                           limits, "torque demand of the optimal stroke over the pull-out curve" if machine.stepper
                           else "torque-speed path of the optimal stroke over the cycle")
     if path is not None:
+        from .figures import fit_titles
+
+        fit_titles(fig)  # no title wider than its axes
         fig.savefig(path, dpi=110)
         plt.close(fig)
     return fig
@@ -97,6 +103,9 @@ def plot_design_sweep(rows: list[dict], path=None, objective: str | None = None)
     ax.set_title(f"optimal design ({objective or 'objective'}; motor {motors}) over the stitch rate "
                  "(red: infeasible)", fontsize=10)
     if path is not None:
+        from .figures import fit_titles
+
+        fit_titles(fig)  # no title wider than its axes
         fig.savefig(path, dpi=120)
         plt.close(fig)
     return fig
@@ -243,6 +252,9 @@ def plot_impact_study(rows: list[dict], path=None, objective: str | None = None,
         ax.set_xlabel("impact velocity limit [m/s]")
         ax.grid(True, alpha=0.3)
     if path is not None:
+        from .figures import fit_titles
+
+        fit_titles(fig)  # no title wider than its axes
         fig.savefig(path, dpi=120)
         plt.close(fig)
     return fig

@@ -191,6 +191,9 @@ def plot_sizing(sizing, candidate=None, path=None):
     draw_torque_terms(ax2, 360.0 * sizing.kinematics.t / sizing.period, terms,
                       f"torque over the cycle (binding: {c.binding})")
     if path is not None:
+        from .figures import fit_titles
+
+        fit_titles(fig)  # no title wider than its axes
         fig.savefig(path, dpi=110)
         plt.close(fig)
     return fig

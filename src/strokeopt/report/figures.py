@@ -42,7 +42,8 @@ def legend_outside(ax, where: str = "right", ncol: int = 1, **kwargs):
     if where == "below":  # as many columns as the figure's width holds (DejaVu Sans: about 0.6 em a character)
         labels = ax.get_legend_handles_labels()[1]
         column_pt = 0.6 * kwargs["fontsize"] * max((len(x) for x in labels), default=1) + 30
-        ncol = max(1, min(ncol, int(0.95 * ax.figure.get_figwidth() * 72 // column_pt)))
+        room_pt = max(ax.get_position().width * 1.15, 0.3) * ax.figure.get_figwidth() * 72  # about the axes' width
+        ncol = max(1, min(ncol, int(room_pt // column_pt)))
         # under the x label: its height in axes fractions from the axes' height in inches
         height = ax.get_position().height * ax.figure.get_figheight()
         return ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.55 / max(height, 0.5)), ncol=ncol,

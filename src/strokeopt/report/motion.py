@@ -156,6 +156,9 @@ def plot_kinematics(problem, strokes, spm: float, path: str | Path | None = None
     fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 9), constrained_layout=True)
     draw_kinematics(list(axes), problem, strokes, spm, n)
     if path is not None:
+        from .figures import fit_titles
+
+        fit_titles(fig)  # no title wider than its axes
         fig.savefig(path, dpi=120)
         plt.close(fig)
     return fig

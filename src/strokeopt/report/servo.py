@@ -113,6 +113,9 @@ def plot_accuracy(result: AccuracyResult, path: str | Path | None = None, motor:
     on = f" on {motor}" if motor else ""
     axes[0].set_title(f"{result.label}{on} at {result.spm:g} spm: handover error {result.handover_error * 1e3:.3f} mm")
     if path is not None:
+        from .figures import fit_titles
+
+        fit_titles(fig)  # no title wider than its axes
         fig.savefig(path, dpi=120)
         plt.close(fig)
     return fig
@@ -173,6 +176,9 @@ def plot_tradeoff(report: dict, path: str | Path | None = None):
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="best", fontsize=8)
     if path is not None:
+        from .figures import fit_titles
+
+        fit_titles(fig)  # no title wider than its axes
         fig.savefig(path, dpi=120)
         plt.close(fig)
     return fig
