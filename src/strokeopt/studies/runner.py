@@ -1,5 +1,6 @@
 """The study runner: the independent pieces of a study (the rates of a sweep, the limits of the impact study)
-run as tasks on ``dask.distributed``, or one after the other in this process.
+(and the samples of the tolerance study, :mod:`.robust`) run as tasks on ``dask.distributed``, or one after the
+other in this process.
 
 Where the tasks run is a :class:`StudyRunner`:
 
@@ -8,21 +9,22 @@ Where the tasks run is a :class:`StudyRunner`:
   the study and closed after it (:func:`default_workers`: one per core of the machine);
 * ``scheduler="tcp://HOST:PORT"`` (or the environment variable ``STROKEOPT_SCHEDULER``): the workers of an existing
   Dask cluster, each with strokeopt installed (``dask scheduler`` and ``dask worker tcp://HOST:PORT --nthreads 1``).
-  An unreachable scheduler, one without workers or a worker without strokeopt is bad input
-  (:class:`~strokeopt.errors.ProblemError`, one line) raised before any task is submitted.
+  An unreachable scheduler, a server that is no Dask scheduler, a scheduler without workers or a worker without
+  strokeopt is bad input (:class:`~strokeopt.errors.ProblemError`, one line) raised before any task is submitted.
 
 :func:`run_study` runs a *step* ``step(shared, item, warm) -> (row, warm)`` over the items. With ``chained=True``
 the items are split into contiguous runs, one per worker, and within a run each item is warm-started from the
 previous one's ``warm`` (with one worker: the single run of today's sequential study); each item is still a task
 of its own (the progress bar counts them, a failure names one item), chained to its predecessor through Dask's
 dependencies. ``shared`` (the problem, objective, settings) is sent to each worker once (``Client.scatter``), not
-with every task: a worker's tasks see one problem object, so the NLPs built for it (``design/nlp.py`` NLP_CACHE,
-per process) serve every task of the run on that worker.
+with every task: a worker's tasks see one problem object, so the NLPs built for it (``design/transcription/nlp.py``
+NLP_CACHE, per process) serve every task on that worker.
 
 A step that raises is reported with its item (:class:`TaskOutcome` ``error``) and the other items' results are
-kept; the next item of its run starts from what the failed one started from. A worker that dies has its tasks rescheduled by Dask on the
-others; a task that keeps killing workers (``distributed.scheduler.allowed-failures``) is reported as lost
-(``lost=True``) with the items chained after it. Ctrl-C cancels the submitted tasks and closes the cluster.
+kept; the next item of its run starts from what the failed one started from. A worker that dies has its tasks
+rescheduled by Dask on the others; a task that keeps killing workers (``distributed.scheduler.allowed-failures``)
+is reported as lost (``lost=True``) with the items chained after it. Ctrl-C cancels the submitted tasks and
+closes the cluster.
 """
 
 from __future__ import annotations
