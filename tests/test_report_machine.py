@@ -137,13 +137,14 @@ NAMES = ["reference", "contact design", "knitting"]
 MUST = {
     "reference": {"problem": ["pulley teeth", "servo"], "stroke": ["bar position", "pulley radius"],
                   "drive": ["rated (continuous)", "rated speed", "RMS"], "accuracy": ["handover error", "belt"],
-                  "verification": ["impact", "lag mm", "gap N", "release"]},
+                  "verification": ["impact", "lag mm", "gap N", "release", "Of 4 criteria: 2 met, 2 not judged"]},
     "contact design": {"problem": ["pulley teeth"], "stroke": ["bar position"], "drive": ["rated speed"],
                        "accuracy": ["handover error"], "verification": ["impact", "lag mm", "gap N"]},
     "knitting": {"problem": ["screw and lever", "stepper", "screw lead", "pull-out"],
                  "stroke": ["cam position", "screw and lever"],
                  "drive": ["pull-out curve", "step rate", "safety factor"],
-                 "verification": ["link force", "elastic / rigid", "rigid chain", "Screw torque", "c2", "c4", "c6"]},
+                 "verification": ["link force", "elastic / rigid", "rigid chain", "Screw torque", "c2", "c4", "c6",
+                                  "Of 3 criteria: 3 not judged"]},
 }
 MUST_NOT = {
     "knitting": ["pulley teeth", "continuous teeth", "None teeth", "bar position", "rated curves", "rated (continuous)",

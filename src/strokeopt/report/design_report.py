@@ -461,8 +461,10 @@ def section_verification(d: ReportData) -> str:
     if block is not None:
         judged = h.para(f"The design's stroke re-simulated in scene {block['scene']!r} at {block['spm']:g} spm "
                         f"(contact model, CVODES) and judged:") + _criteria_table(block)
-        if d.summary.get("verdict"):
-            judged += h.para(f"Verdict: {d.summary['verdict']}")
+        oks = [r["ok"] for r in block["criteria"]]
+        counts = [(oks.count(True), "met"), (oks.count(False), "failed"),
+                  (oks.count(None), "not judged (the problem sets no limit: the value is reported)")]
+        judged += h.para(f"Of {len(oks)} criteria: " + ", ".join(f"{n} {what}" for n, what in counts if n) + ".")
         out += f'<div class="keep">{judged}</div>'  # the judgement stays with the section's heading
     out += _chain_verification(d) if d.machine.scene == ELASTIC_CHAIN else _needle_bar_verification(d)
     if d.not_simulated:
@@ -493,10 +495,10 @@ def section_numerics(d: ReportData) -> str:
         o = r.options
         facts.append((f"contact scene {name}: integrator", f"{o.method}, rtol {o.rtol:g}, atol {o.atol:g}, "
                                                           f"CPU {r.cpu_time_s:.2f} s", None))
-    return (h.key_table(facts) + h.para(
+    return (h.para(
         "What tightening costs: `strokeopt solve PROBLEM --study mesh` solves the same design on finer meshes and "
         "higher degrees and prints the objective's error against the finest with the time each took; `strokeopt "
-        "simulate PROBLEM --study tolerance` does the same for the integrator's tolerances."))
+        "simulate PROBLEM --study tolerance` does the same for the integrator's tolerances.") + h.key_table(facts))
 
 
 def _flat(data, prefix: str = "") -> list[tuple[str, Any]]:
