@@ -107,7 +107,8 @@ def _figure_facts(fig, caption):
         axes.append({"ylabel": ylabel, "xlabel": ax.get_xlabel(), "xlim": ax.get_xlim(), "lines": lines,
                      "legend_over_data": over})
     return {"caption": caption, "outside": outside, "smallest": smallest, "axes": axes,
-            "title": " ".join(ax.get_title() for ax in fig.axes)}
+            "title": " ".join(ax.get_title() for ax in fig.axes),
+            "printed_height_in": fig.get_figheight() * min(1.0, A4_WIDTH_IN / fig.get_figwidth())}
 
 
 @pytest.fixture(scope="module")
@@ -216,6 +217,8 @@ def test_figures_survive_print(reports, name):
         assert not f["outside"], (name, f["caption"][:60], f["outside"])  # nothing clipped at the figure's edge
         size, text = f["smallest"]
         assert size >= 7.0, (name, f["caption"][:60], size, text)  # at least 7 pt printed on A4
+        # a figure and its caption fit one A4 page (297 - 2 x 14 mm), so that it is never split
+        assert f["printed_height_in"] <= (297 - 28) / 25.4 - 0.6, (name, f["caption"][:60], f["printed_height_in"])
         for ax in f["axes"]:
             assert not ax["legend_over_data"], (name, f["caption"][:60], ax["ylabel"])
             if ax["xlabel"].startswith("cam angle") and "(detail" not in ax["xlabel"]:  # the whole cycle shown
