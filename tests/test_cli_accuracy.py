@@ -120,7 +120,7 @@ def test_tradeoff_classic_json_and_plot(capsys, reference_path, tmp_path):
 
 @pytest.mark.parametrize("args, words", [
     (["--accuracies", "0.1,abc"], "--accuracies"),
-    (["--accuracies", "0.1,-0.2"], "positive"),
+    (["--accuracies", "0.1,-0.2"], "every accuracy must lie in [0.0001, 100] mm"),
     (["--resolution", "0"], "--resolution"),
 ])
 def test_tradeoff_bad_options_exit_2(capsys, reference_path, args, words):

@@ -372,7 +372,8 @@ def load_design(path, problem_file=None, overrides=()) -> DesignStroke:
     """
     data, stroke = read_design(path)
     file = design_problem_file(path, data, problem_file)
-    problem = load_problem(file, [*design_overrides(data), *overrides, f"machine.spm={float(data['spm'])!r}"])
+    # the design's rate, not an override the user typed: the problem's --set list stays the design's own
+    problem = load_problem(file, [*design_overrides(data), *overrides]).with_spm(float(data["spm"]))
     check_design_fits(data, problem, str(path))
     return DesignStroke(problem, stroke, problem.spm, str(path), data.get("objective"))
 

@@ -111,8 +111,9 @@ def solve_verified(problem, *, objective: str | None = None, spm: float | None =
 
 
 def verify_design(design, *, accuracy=None, compare: bool = False, scenes=None, options=None) -> VerifiedDesign:
-    """Judge a solved design (or one read back from a design.json): its full servo simulation (``accuracy``
-    if already made), its contact verification, the scenes ``scenes`` beside it, one status, one verdict."""
+    """Judge a solved :class:`~strokeopt.design.result.Design` (a design.json is read back into one by
+    ``design_from_data``): its full servo simulation (``accuracy`` if already made), its contact verification,
+    the scenes ``scenes`` beside it, one status, one verdict."""
     problem = design.problem
     if accuracy is None and getattr(problem, "servo", None) is not None and design.motor_spec is not None:
         from ..servo.accuracy import design_accuracy
@@ -154,7 +155,8 @@ def _unjudged(block: dict | None) -> tuple:
 def _verdict(design, block: dict | None, unjudged: tuple) -> str:
     """One line: what failed, or what was judged and met and what was not judged (with its value)."""
     if design.status == "limits exceeded":
-        return f"limits exceeded: {design.notes[0]}" if design.notes else "limits exceeded"
+        first = design.notes[0] if design.notes else ""
+        return first if first.startswith("limits exceeded") else f"limits exceeded: {first}".rstrip(": ")
     if block is not None and block["status"] != "ok":
         return block["verdict"]
     judged = [c["name"] for c in design.checks if c.get("ok")]
@@ -165,12 +167,17 @@ def _verdict(design, block: dict | None, unjudged: tuple) -> str:
     if block is not None:
         met += [r["criterion"] for r in block["criteria"] if r["ok"] is True and r["criterion"] != "handover accuracy"]
     where = f" (scene {block['scene']!r})" if block is not None else ""
+    # values reported beside the criteria (an elastic chain's link forces): no limit exists for them, so they
+    # are named as reported, never counted as met
+    reported = [r for r in (block or {}).get("criteria", []) if r["ok"] is None and r["criterion"] not in LIMIT_FIELDS]
+    also = ("; reported, no limit: " + ", ".join(f"{r['criterion']} {r['value']:.4g} {r['unit']}" for r in reported)
+            if reported else "")
     if unjudged:
         values = ", ".join(f"{r['criterion']} {r['value']:.4g} {r['unit']}" for r in unjudged)
         fields = ", ".join(r["field"] for r in unjudged)
         return (f"solved, {len(unjudged)} criteria not judged{where}: {values} (no limit: set {fields}); "
-                f"met: {', '.join(met) or 'the design limits'}")
+                f"met: {', '.join(met) or 'the design limits'}{also}")
     if block is None and handover is None:
         return f"solved: {len(judged)} design limits met on the rigid model; nothing re-simulated " \
                "(no [servo] section, no scenes)"
-    return f"verified{where}: " + ", ".join(met + [f"{len(judged)} design limits met"])
+    return f"verified{where}: " + ", ".join(met + [f"{len(judged)} design limits met"]) + also
