@@ -28,12 +28,15 @@ def read_csv(path: Path) -> tuple[list[str], list[str], np.ndarray]:
 
 
 @pytest.fixture(scope="module")
-def counts_table(tmp_path_factory):
-    """The reference design written with 720 points per cycle, the master in counts (7200 per cycle)."""
+def counts_table(tmp_path_factory, reference_verified, write_verified):
+    """The reference design (the session's one verified solve, conftest.py) written as ``solve --out DIR
+    --cam-table-resolution 720/cycle --master-unit counts --master-counts 7200`` writes it: 720 points per
+    cycle, the master in counts (7200 per cycle)."""
+    from strokeopt.files.design_file import CamTableSpec
+
     out = tmp_path_factory.mktemp("cam") / "out"
-    code = main(["solve", str(REFERENCE), "--out", str(out), "--plot", "none", "--json",
-                 "--cam-table-resolution", "720/cycle", "--master-unit", "counts", "--master-counts", "7200"])
-    assert code == 0
+    write_verified(reference_verified, out, CamTableSpec(parse_cam_resolution("720/cycle"), "counts", 7200),
+                   report=False)
     return out
 
 

@@ -71,6 +71,7 @@ def test_text_report_and_out_dir(capsys, tmp_path):
     assert "1000         up" in text and "1000       down" in text
 
 
+@pytest.mark.slow  # two sweeps of three rates through the command line
 def test_sweep_prints_fastest_feasible_rate(capsys):
     argv = ["solve", str(KNOWN / "jerk_bounded_peak_accel.toml"), "--set", "design.jerk_max_from_law=false",
             "--set", "design.jerk_max_m_s3=60", "--spm", "30:42:6", "--plot", "none"]
@@ -83,6 +84,7 @@ def test_sweep_prints_fastest_feasible_rate(capsys):
     assert data["fastest_feasible_is_sweep_end"] is False
 
 
+@pytest.mark.slow  # two sweeps of two rates through the command line
 def test_sweep_that_never_fails_says_the_limit_is_beyond_it(capsys):
     # every rate feasible: the end of the sweep is a lower bound of the fastest rate, not the fastest rate
     argv = ["solve", str(KNOWN / "min_jerk.toml"), "--spm", "30:40:10", "--plot", "none"]

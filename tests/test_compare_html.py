@@ -1,4 +1,4 @@
-"""`strokeopt compare`: the min_peak_torque and min_rms_torque designs at 600 spm side by side."""
+"""`strokeopt compare`: the min_peak_torque and min_rms_torque designs of the reference (500 spm) side by side."""
 
 from __future__ import annotations
 
@@ -42,15 +42,21 @@ class Cells(HTMLParser):
 
 
 @pytest.fixture(scope="module")
-def two_designs(tmp_path_factory):
+def two_designs(tmp_path_factory, reference_written, write_verified):
+    """Two design.json files as ``solve --out DIR`` writes them, each in a directory named by its objective
+    (compare's column heads): the reference (min_peak_torque, the session's one verified solve, conftest.py)
+    and its min_rms_torque design, solved through the same verified pipeline."""
+    import shutil
+
+    from strokeopt import load_problem, solve_verified
+
     root = tmp_path_factory.mktemp("compare")
-    files = []
-    for objective in ("min_peak_torque", "min_rms_torque"):
-        out = root / objective
-        assert main(["solve", str(REFERENCE), "--spm", "600", "--objective", objective, "--out", str(out),
-                     "--plot", "none", "--json"]) == 0
-        files.append(out / "design.json")
-    return root, files
+    (root / "min_peak_torque").mkdir()
+    peak = shutil.copy(reference_written.design_json, root / "min_peak_torque" / "design.json")
+    rms = solve_verified(load_problem(REFERENCE), objective="min_rms_torque")
+    assert rms.ok
+    written = write_verified(rms, root / "min_rms_torque", report=False)
+    return root, [Path(peak), written.design_json]
 
 
 def test_compare_shows_the_two_designs_side_by_side(two_designs, capsys):

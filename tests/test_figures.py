@@ -44,6 +44,7 @@ def test_json_alone_writes_no_figure_unless_plot_asks(capsys, reference_path, tm
     assert (tmp_path / "k.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow  # two solves at 600 spm through the command line, with design.json, report and figures
 def test_solve_writes_its_figure_once_with_the_torque_speed_path(capsys, reference_path, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert main(["solve", str(reference_path), "--spm", "600", "--out", "out"]) == 0
@@ -55,11 +56,10 @@ def test_solve_writes_its_figure_once_with_the_torque_speed_path(capsys, referen
     assert [f.name for f in (tmp_path / "strokeopt-out").iterdir()] == [f"{STEM}_solve_600spm_min_rms_torque.png"]
 
 
-def test_design_figure_has_the_torque_speed_panel(reference):
-    from strokeopt.design.solve import solve_design
+def test_design_figure_has_the_torque_speed_panel(reference, reference_verified):
     from strokeopt.report.design import plot_design
 
-    design = solve_design(reference)  # 500 spm: 055U2B30, 24 teeth, 0.8596 N m
+    design = reference_verified.design  # 500 spm: 055U2B30, 24 teeth, 0.8596 N m (conftest.py, solved once)
     fig = plot_design(design, reference.stroke(design.spm))
     panel = [ax for ax in fig.axes if ax.get_xlabel() == "motor speed [rpm]"]
     assert len(panel) == 1

@@ -158,11 +158,9 @@ def test_good_solver_options_are_used(capsys, write_problem):
 # ---------------------------------------------------------------- design.json (tracebacks in verify before)
 
 @pytest.fixture(scope="module")
-def design_json(tmp_path_factory, reference_path):
-    out = tmp_path_factory.mktemp("design")
-    assert main(["solve", str(reference_path), *FIXED, "--spm", "600", "--out", str(out), "--plot", "none",
-                 "--json"]) == 0
-    return json.loads((out / "design.json").read_text())
+def design_json(reference_written):
+    """A design.json as ``solve --out`` writes it (the session's reference design, conftest.py), to damage."""
+    return json.loads(reference_written.design_json.read_text())
 
 
 def _truncate(d):

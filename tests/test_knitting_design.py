@@ -108,6 +108,7 @@ def test_min_time_step_verified_in_the_elastic_chain(fastest):
     assert f6 < 21.7  # below the 6 ms linear ramps' (tests/test_knitting.py): a longer, smoother step
 
 
+@pytest.mark.slow  # two solves through the command line (the failing 6 ms step, the relaxed one with --out)
 def test_solve_cli_on_the_knitting_drive(capsys, tmp_path):
     # the 6 ms step at the pull-out curve: exit 1 with the limit named; relaxed: the design, its check table,
     # design.json and the cam table with the motor angle through the screw and lever

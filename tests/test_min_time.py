@@ -72,6 +72,7 @@ def test_min_time_needs_a_drive():
         solve_design(load_problem(KNOWN / "min_peak_accel.toml"), objective="min_time")
 
 
+@pytest.mark.slow  # a min_time continuation and two warm-started solves
 def test_min_time_reference_drive_is_the_feasibility_boundary(reference):
     # the thesis drive (055U2B30, 28 teeth) at 0.5 mm: the min_time rate is feasible for the fixed-rate
     # design (file's objective), and 1 % above it no design meets the limits

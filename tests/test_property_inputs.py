@@ -18,6 +18,7 @@ import tomllib
 
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+import pytest
 
 from strokeopt import ProblemError, SolverError, load_problem
 from strokeopt.cli.main import main
@@ -103,6 +104,7 @@ def _no_bad_numbers(text: str) -> bool:
     return finite_json(json.loads(text, parse_constant=refuse))
 
 
+@pytest.mark.slow  # 300 mutated problem files through the command line
 @settings(max_examples=300, derandomize=True, deadline=None, database=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 @given(data=mutated_problem(), kinematics=st.sampled_from([False, False, False, True]))  # size is 10x cheaper

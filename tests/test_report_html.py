@@ -80,16 +80,10 @@ def _value(text: str):
 
 
 @pytest.fixture(scope="module")
-def solved(tmp_path_factory):
-    """`solve --json --out DIR` of the reference problem (which writes DIR/report.html) and its JSON."""
-    out = tmp_path_factory.mktemp("report") / "out"
-    import io
-    from contextlib import redirect_stdout
-
-    buf = io.StringIO()
-    with redirect_stdout(buf):
-        assert main(["solve", str(REFERENCE), "--out", str(out), "--json"]) == 0
-    return out, json.loads(buf.getvalue())
+def solved(reference_written):
+    """The reference design as `solve --json --out DIR` writes it (DIR/report.html among the files) and its
+    JSON: the session's one verified solve (conftest.py)."""
+    return reference_written.out, reference_written.summary
 
 
 def test_every_section_every_figure_inlined_valid_html(solved):
@@ -159,6 +153,7 @@ def test_report_refuses_a_directory_or_a_non_html_name_before_solving(capsys, tm
     assert "no scene 'nope'" in capsys.readouterr().err
 
 
+@pytest.mark.slow  # two runs of a headless browser
 def test_a_real_browser_prints_the_report(solved, tmp_path):
     if not CHROMIUM.exists():
         pytest.skip("no /usr/bin/chromium: the browser check needs Debian's chromium (apt-get install chromium)")

@@ -199,6 +199,7 @@ def test_any_stroke_function(problem, reference_path):
         simulate_scene(problem, "release", 500, stroke=problem.stroke(600))
 
 
+@pytest.mark.slow  # a tolerance study: five simulations and a tight reference
 def test_tolerance_study_converges(problem):
     study = tolerance_study(problem, "release", 600, rtols=(1e-4, 1e-6), smoothings=(1e-6, 1e-7),
                             methods=("cvodes",), reference=SimulationOptions(rtol=1e-8, atol=1e-9))
