@@ -244,33 +244,22 @@ def run_on_client(client, step, items: list, shared, *, progress=None, chained: 
         done = _Completed(futures, client.loop)
         for _ in (progress(done) if progress is not None else done):
             pass
-        rows = {k: client.submit(_without_warm, fut, pure=False, key=f"strokeopt-{token}-{k}-row")
-                for k, fut in enumerate(futures) if fut.status == "finished"}
+        # every row through a small task beside its outcome: a finished outcome whose worker died since is
+        # computed again by Dask; a lost one gives its row task its error
+        rows = [client.submit(_without_warm, fut, pure=False, key=f"strokeopt-{token}-{k}-row")
+                for k, fut in enumerate(futures)]
         outcomes = []
-        for k, (fut, item) in enumerate(zip(futures, items)):
-            if k in rows:
-                try:
-                    outcomes.append(rows[k].result())
-                    continue
-                except Exception as exc:  # noqa: BLE001  (its worker died between the two)
-                    error = exc
-            else:
-                error = _future_error(fut)
-            outcomes.append(TaskOutcome(item, error=f"task lost: {_one_line(error)}", lost=True))
+        for row, item in zip(rows, items):
+            try:
+                outcomes.append(row.result())
+            except Exception as exc:  # noqa: BLE001  (its task, or one it was chained to, was lost)
+                outcomes.append(TaskOutcome(item, error=f"task lost: {_one_line(exc)}", lost=True))
         return outcomes
     except BaseException:
         client.cancel(futures, force=True)
         raise
     finally:
         client.cancel([scattered], force=True)
-
-
-def _future_error(fut) -> BaseException:
-    try:
-        exc = fut.exception(timeout=CONNECT_TIMEOUT_S)
-    except Exception as err:  # noqa: BLE001  (cancelled: no exception to ask for)
-        return err
-    return exc if exc is not None else RuntimeError(f"task {fut.status}")
 
 
 @contextmanager
