@@ -21,7 +21,7 @@ from .design.transcription.contact_setup import check_contact
 from .design.transcription.free import check_free
 from .design.transcription.settings import parse_design
 from .drive.spec import parse_drive
-from .drive.transmission import PROFILE_PITCH, TEETH_RANGE, BeltPulley, ScrewLever, Transmission
+from .drive.transmission import PROFILE_PITCH, TEETH_RANGE, BeltPulley, Gearbox, ScrewLever, Transmission
 from .errors import ProblemError
 from .io.fields import _REQUIRED, Fields, apply_overrides
 from .motion.laws import LAW_NAMES, LAW_PARAMETERS, MotionLaw, make_law
@@ -122,8 +122,8 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
     model = parse_model(top.table("model", required=False), transmission)
     scenes = parse_scenes(top.table("scenes", required=False), model)
     drive_table = top.table("drive", required=False)
-    drive = parse_drive(drive_table, (path or Path(file)).parent, model, _model_reference(model, timing)) \
-        if drive_table is not None else None
+    drive = parse_drive(drive_table, (path or Path(file)).parent, model, _model_reference(model, timing),
+                        rotary=timing.rotary) if drive_table is not None else None
     if model is not None and model.transmission is not None and timing.intervals[0].start_position != 0:
         raise ProblemError(file, "timing.start_position_mm", "a model on the transmission's members starts at the "
                                                              "transmission's zero: start_position_mm must be 0")
@@ -204,10 +204,15 @@ MOVE_SPAN_MIN_DEG = 0.1
 
 def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagram:
     times = f.string("interval_times", "nominal", choices=INTERVAL_TIMES)
-    # lengths in mm: within +-100 m of the origin, strokes up to 100 m (a loom sley swings 0.1 m, the known
-    # optima use 1 m, a gantry tens of metres), so no position overflows a kinematic table
-    position = f.number("start_position_mm", min=-1e5, max=1e5) * 1e-3
+    # a linear load states its positions in mm, a rotary one (a sley on its shaft) in deg; one unit per file
     rows = f.tables("intervals")
+    unit = _timing_unit(f, rows)
+    ukey, to_si = ("mm", 1e-3) if unit == "m" else ("deg", math.pi / 180)
+    # lengths in mm: within +-100 m of the origin, strokes up to 100 m (a loom sley swings 0.1 m, the known
+    # optima use 1 m, a gantry tens of metres), so no position overflows a kinematic table; angles within
+    # +-100 turns, strokes up to 100 turns (a sley swings 19.5 deg, an indexing table a turn)
+    lim = 1e5 if unit == "m" else 36000.0
+    position = f.number(f"start_position_{ukey}", min=-lim, max=lim) * to_si
     if len(rows) < 2:
         raise f.error("intervals", f"needs at least two intervals (a move and a dwell), got {len(rows)}")
     intervals = []
@@ -215,14 +220,14 @@ def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagra
     for row in rows:
         name = row.string("name")
         span = row.number("span_deg", min=0.0, max=360.0)
-        stroke = row.number("stroke_mm", 0.0, min=0.0, max=1e5) * 1e-3
+        stroke = row.number(f"stroke_{ukey}", 0.0, min=0.0, max=lim) * to_si
         # published interval times: a cycle of at most an hour (only their proportions are used)
         published = row.number("published_time_s", None, min=0.0, max=3600.0) if times == "nominal" else \
             row.number("published_time_s", positive=True, max=3600.0)
         handover = row.boolean("handover", False)
         if stroke > 0:
             if span < MOVE_SPAN_MIN_DEG:
-                raise row.error("span_deg", f"a move ({stroke * 1e3:g} mm) needs a span of at least "
+                raise row.error("span_deg", f"a move ({stroke / to_si:g} {ukey}) needs a span of at least "
                                             f"{MOVE_SPAN_MIN_DEG:g} deg, got {span:g} deg")
             direction = row.string("direction", choices=("up", "down"))
             law = _read_law(row, "law", default_law)
@@ -232,7 +237,7 @@ def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagra
         else:
             for key in ("direction", "law", *LAW_PARAMETERS):
                 if row.has(key):
-                    raise row.error(key, "a dwell (stroke_mm = 0) has no " + key)
+                    raise row.error(key, f"a dwell (stroke_{ukey} = 0) has no " + key)
             if handover:
                 raise row.error("handover", "must be on the move that ends at the handover position, not on a dwell")
             law, signed, move_index = None, 0.0, None
@@ -254,14 +259,31 @@ def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagra
                                             f"timing.interval_times = \"nominal\" to use the spans")
     start = intervals[0].start_position
     if abs(position - start) > 1e-9:
-        raise f.error("intervals", f"the strokes do not close the cycle: the last interval ends at {position * 1e3:g} mm, "
-                                   f"the first starts at {start * 1e3:g} mm (a move missing, or a direction wrong?)")
+        raise f.error("intervals", f"the strokes do not close the cycle: the last interval ends at {position / to_si:g} "
+                                   f"{ukey}, the first starts at {start / to_si:g} {ukey} (a move missing, or a direction "
+                                   "wrong?)")
     if n_moves == 0:
-        raise f.error("intervals", "has no move (every stroke_mm is 0)")
+        raise f.error("intervals", f"has no move (every stroke_{ukey} is 0)")
     if sum(i.handover for i in intervals) > 1:
         raise f.error("intervals", "more than one interval is marked handover = true")
     f.finish()
-    return TimingDiagram(tuple(intervals), revs, times)
+    return TimingDiagram(tuple(intervals), revs, times, unit)
+
+
+def unit_key(unit: str) -> str:
+    """The suffix of a problem file's position keys for the load's SI unit: "mm" for "m", "deg" for "rad"."""
+    return "mm" if unit == "m" else "deg"
+
+
+def _timing_unit(f: Fields, rows: list[Fields]) -> str:
+    """"m" when ``[timing]`` states its positions and strokes in mm, "rad" when in deg; both is refused."""
+    found = {u for u, key in (("m", "mm"), ("rad", "deg"))
+             if f.has(f"start_position_{key}") or any(r.has(f"stroke_{key}") for r in rows)}
+    if len(found) > 1:
+        raise f.error("start_position_deg" if f.has("start_position_deg") else "intervals",
+                      "states positions in both mm and deg: a problem states one unit (mm for a linear load, "
+                      "deg for a rotary one)")
+    return found.pop() if found else "m"
 
 
 #: Lead angle plus the flanks' friction angle of a screw the motor turns [deg]: at 90 deg the torque
@@ -277,7 +299,21 @@ def _optional_mm(f: Fields, key: str, lo: float, hi: float) -> float | None:
 def _read_transmission(trans: Fields, timing: TimingDiagram) -> Transmission:
     """``[transmission]``: a toothed belt pulley (``pulley_teeth``), or a screw and lever (``lead_mm``,
     ``lever_arm_mm`` R0, ``sleeve_arm_mm`` R0P, ``lever_offset_deg``, ``screw_inertia_kg_cm2``)."""
-    kind = trans.string("type", "belt_pulley", choices=("belt_pulley", "screw_lever"))
+    kind = trans.string("type", "belt_pulley", choices=("belt_pulley", "screw_lever", "gearbox"))
+    if (kind == "gearbox") != timing.rotary:
+        raise trans.error("type", f"{kind!r} drives a {'rotary' if kind == 'gearbox' else 'linear'} load, but "
+                                  f"[timing] states its positions in {unit_key(timing.unit)}: a gearbox takes "
+                                  "positions and strokes in deg (start_position_deg, stroke_deg), a belt pulley or "
+                                  "a screw and lever in mm")
+    if kind == "gearbox":
+        # motor turns per output turn: 1 (a direct drive) to 1000 (a two-stage worm); a gearbox's own inertia on
+        # the motor shaft as a rotor's (catalogue.py: to 1e6 kg cm^2). The ratio is the problem's design choice:
+        # a design uses it as stated (a study compares ratios by --set transmission.ratio=...)
+        gear = Gearbox(trans.number("ratio", min=1.0, max=1000.0),
+                       trans.number("inertia_kg_cm2", 0.0, min=0.0, max=1e6) * 1e-4,
+                       trans.string("gearbox", None))
+        trans.finish()
+        return gear
     if kind == "belt_pulley":
         profile = trans.string("profile", "GT3", choices=tuple(PROFILE_PITCH))
         teeth = trans.number("pulley_teeth", integer=True, min=TEETH_RANGE[0], max=TEETH_RANGE[1])

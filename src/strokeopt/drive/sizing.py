@@ -290,7 +290,8 @@ def size_drive(problem, spm: float | None = None, *, catalogue=None, motors=None
         for c in it:
             c.max_spm, c.max_spm_binding = max_spm(kin, spm, c.motor, c.pulley, spec.load, spec.limits, belt, resolution)
     inputs = {
-        "moving_mass_kg": spec.load.moving_mass,
+        "moving_mass_kg": spec.load.moving_mass,  # kg m^2 for a rotary load (load_unit "rad")
+        "load_unit": problem.timing.unit,
         "gravity_m_s2": spec.load.gravity,
         "load_forces": [{"name": f.name, "kind": f.kind, "direction": "up" if f.direction > 0 else "down",
                          "force_N": f.force, "stiffness_N_m": f.stiffness,

@@ -8,6 +8,7 @@ the catalogue (catalogue.py) that sizing.py and the design search.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -52,13 +53,26 @@ class DriveSpec:
                         self.allowable_tension)
 
 
-def parse_drive(f, base_dir: Path | None = None, model=None, reference=None) -> DriveSpec:
+def parse_drive(f, base_dir: Path | None = None, model=None, reference=None, rotary: bool = False) -> DriveSpec:
     """Read the ``[drive]`` table (a :class:`~strokeopt.io.fields.Fields`) of a problem file. ``model``: the
-    contact model (``[model]``), whose springs a load force may name (``model_spring``) instead of its numbers."""
+    contact model (``[model]``), whose springs a load force may name (``model_spring``) instead of its numbers.
+    ``rotary``: the load turns (``[timing]`` in deg): its ``moving_inertia_kg_m2`` about its shaft takes the
+    place of ``moving_mass_kg`` in the same equations, its load forces are torques (N m, N m/rad, deg)."""
     motor = f.string("motor", None)
-    # 0.1 g (a knitting machine's screw nut is 3 g) to a tonne (a loom sley is 25 kg)
-    mass = f.number("moving_mass_kg", min=1e-4, max=1e3)
-    gravity_dir = f.string("gravity", "down", choices=("down", "up", "off"))
+    if rotary:
+        if f.has("moving_mass_kg"):
+            raise f.error("moving_mass_kg", "the load turns ([timing] in deg): give its moving_inertia_kg_m2 about "
+                                            "its shaft instead")
+        # 1 g cm^2 (a small lever) to 1000 kg m^2 (a large turntable; a loom sley is 1.3 kg m^2)
+        mass = f.number("moving_inertia_kg_m2", min=1e-7, max=1e3)
+    else:
+        if f.has("moving_inertia_kg_m2"):
+            raise f.error("moving_inertia_kg_m2", "the load translates ([timing] in mm): give its moving_mass_kg, or "
+                                                  "state [timing] in deg for a rotary load")
+        # 0.1 g (a knitting machine's screw nut is 3 g) to a tonne (a loom sley is 25 kg)
+        mass = f.number("moving_mass_kg", min=1e-4, max=1e3)
+    # a rotary load's gravity torque depends on its centre of gravity, which [drive] does not state: off
+    gravity_dir = f.string("gravity", "off" if rotary else "down", choices=("off",) if rotary else ("down", "up", "off"))
     # positions in problem files are measured upward
     gravity = {"down": -G, "up": G, "off": 0.0}[gravity_dir]
     # servo drives give 100-500 % of rated torque for a peak; inertia ratios from 1:10 to 1000:1 are sized
@@ -72,6 +86,8 @@ def parse_drive(f, base_dir: Path | None = None, model=None, reference=None) -> 
     if tmax < tmin:
         raise f.error("pulley_teeth_max", f"{tmax} is below pulley_teeth_min {tmin}")
     belt = f.string("belt", None)
+    if rotary and belt is not None:
+        raise f.error("belt", "a rotary load through a gearbox has no toothed belt to check")
     cord = f.string("belt_cord", "glass", choices=BELT_CORDS)
     # belt catalogues' service factors run 1.0-2.5 (appendix 2: 1.5); a tension above 100 kN is no toothed belt
     service = f.number("belt_service_factor", 1.5, min=0.5, max=5.0)
@@ -91,7 +107,9 @@ def parse_drive(f, base_dir: Path | None = None, model=None, reference=None) -> 
         name = row.string("name")
         kind = row.string("kind", choices=("spring", "constant"))
         direction = {"up": 1.0, "down": -1.0}[row.string("direction", choices=("up", "down"))]
-        if kind == "spring" and row.has("model_spring"):
+        if rotary:
+            forces.append(_rotary_load(row, name, kind, direction))
+        elif kind == "spring" and row.has("model_spring"):
             forces.append(model_spring_force(row, name, direction, model, reference))
         elif kind == "spring":
             # forces up to 100 kN, stiffnesses up to 1e9 N/m (a contact, not a spring), positions within 10 m
@@ -120,6 +138,17 @@ def parse_drive(f, base_dir: Path | None = None, model=None, reference=None) -> 
     return DriveSpec(motor, Load(mass, gravity, tuple(forces), tuple(members)), limits, profile, tmin, tmax, belt,
                      cord, service, allowable, tuple(resolved), f.file)
 
+
+
+def _rotary_load(row, name: str, kind: str, direction: float) -> LoadForce:
+    """A load torque on a rotary load: ``torque_N_m`` (constant), or a torsion spring met at
+    ``contact_position_deg`` with ``preload_N_m`` and ``stiffness_N_m_rad`` (a cloth fell the reed beats
+    against); the same :class:`LoadForce`, in N m, N m/rad and rad."""
+    if kind == "constant":  # torques up to 100 kN m; stiffnesses up to 1e9 N m/rad (a contact); within 100 turns
+        return LoadForce(name, kind, direction, row.number("torque_N_m", min=0.0, max=1e5))
+    return LoadForce(name, kind, direction, row.number("preload_N_m", 0.0, min=0.0, max=1e5),
+                     row.number("stiffness_N_m_rad", min=0.0, max=1e9),
+                     math.radians(row.number("contact_position_deg", min=-36000.0, max=36000.0)))
 
 
 def model_spring_force(row, name: str, direction: float, model, reference=None) -> LoadForce:

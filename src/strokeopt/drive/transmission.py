@@ -328,6 +328,34 @@ class ScrewLever(Transmission):
         return None
 
 
+class Gearbox(Transmission):
+    """A gearbox of ``ratio`` motor turns per output turn driving a rotary load: ``x = phi / ratio`` (the
+    load's angle [rad] from the motor's); ``inertia`` [kg m^2] is the gearbox's own, reduced to the motor
+    shaft (catalogues give it so). ``ratio = 1`` is a direct drive. Its transfer functions come from AD
+    like every transmission's; the load positions of such a problem are angles ([timing] in deg)."""
+
+    name = "gearbox"
+
+    def __init__(self, ratio: float, inertia: float = 0.0, label: str | None = None):
+        if not (ratio > 0 and math.isfinite(ratio)):
+            raise ValueError("gear ratio must be positive")
+        if not (inertia >= 0 and math.isfinite(inertia)):
+            raise ValueError("gearbox inertia must be zero or positive")
+        self.ratio, self.inertia, self.label = float(ratio), float(inertia), label
+
+    def position(self, phi):
+        return phi / self.ratio
+
+    def inverse_position(self, x):
+        return x * self.ratio
+
+    def chain(self):
+        return [("load", self.position, "rad")]
+
+    def __repr__(self) -> str:
+        return f"Gearbox(ratio={self.ratio:g}, inertia={self.inertia:g} kg m^2)"
+
+
 #: The lever angle a screw-lever transmission may reach [deg] (both arms): tan() of the sleeve arm
 #: grows without bound toward 90 deg; at 80 deg one step of the motor moves the sleeve 33 times as
 #: far as at 0 deg -- a toggle, no longer a transmission.

@@ -32,7 +32,8 @@ INTERVAL_TIMES = ("nominal", "published")
 
 @dataclass(frozen=True)
 class Interval:
-    """One interval of the cycle. Positions in metres, measured as the problem states (up positive)."""
+    """One interval of the cycle. Positions in metres (radians for a rotary load: TimingDiagram.unit),
+    measured as the problem states (up positive)."""
 
     index: int  # 1-based position in the cycle
     name: str
@@ -77,6 +78,13 @@ class TimingDiagram:
     intervals: tuple[Interval, ...]
     cam_revolutions_per_stitch: float = 0.5
     interval_times: str = "nominal"
+    #: the SI unit of the load's positions: "m" (a linear load, the file in mm) or "rad" (a rotary load such
+    #: as a sley on its shaft, the file in deg); the design's equations are the same for both
+    unit: str = "m"
+
+    @property
+    def rotary(self) -> bool:
+        return self.unit == "rad"
 
     @property
     def moves(self) -> tuple[Interval, ...]:

@@ -136,11 +136,16 @@ def design_text(design: Design, comparison: list[dict] | None = None) -> str:
         lines.append(f"motor {design.motor}{kind}; pulley {_pulley_text(design)}" + (
             "" if design.pitch_diameter is None else f", pitch diameter {design.pitch_diameter * 1e3:.2f} mm"))
     lines.append("")
-    lines.append(format_table([{**m.to_dict(), "duration_ms": f"{m.duration * 1e3:.3f}"} for m in design.moves],
-                              [("index", "move"), ("name", "interval"), ("stroke_mm", "stroke mm"),
-                               ("direction", "direction"),
-                               ("duration_ms", "move time ms"), ("v_max_m_s", "|v| max m/s"), ("a_max_m_s2", "|a| max m/s2"),
-                               ("jerk_max_m_s3", "|jerk| max m/s3"), ("C_a", "C_a")]))
+    from .units import is_rotary, load_columns, load_label, with_load_stroke
+
+    rotary = is_rotary(design.problem)  # a sley on its shaft: deg, rad/s, rad/s2 (report/units.py)
+    lines.append(format_table([with_load_stroke({**m.to_dict(), "duration_ms": f"{m.duration * 1e3:.3f}"}, rotary)
+                               for m in design.moves],
+                              load_columns([("index", "move"), ("name", "interval"), ("stroke_mm", "stroke mm"),
+                                            ("direction", "direction"),
+                                            ("duration_ms", "move time ms"), ("v_max_m_s", "|v| max m/s"),
+                                            ("a_max_m_s2", "|a| max m/s2"),
+                                            ("jerk_max_m_s3", "|jerk| max m/s3"), ("C_a", "C_a")], rotary)))
     if design.checks:
         lines.append("")
         verified = [c for c in design.checks if "design_term" in c]
@@ -162,7 +167,8 @@ def design_text(design: Design, comparison: list[dict] | None = None) -> str:
     lines.append("")
     lines.append("active constraints: " + ("; ".join(design.active_constraints) or "none"))
     if comparison:
-        cols = [("law", "stroke"), ("a_max_m_s2", "a_max m/s2"), ("jerk_max_m_s3", "jerk_max m/s3")]
+        cols = [("law", "stroke"), ("a_max_m_s2", load_label("a_max m/s2", rotary)),
+                ("jerk_max_m_s3", load_label("jerk_max m/s3", rotary))]
         if "peak_torque_N_m" in comparison[0]:
             cols += [(key, head) for key, head in (("peak_torque_N_m", "peak torque N m"),
                                                    ("rms_torque_N_m", "RMS torque N m"),

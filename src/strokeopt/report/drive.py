@@ -51,14 +51,21 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
         return stepper_text(sizing, report, explain)
     with_max_spm = sizing.max_spm_resolution is not None
     inp = report["inputs"]
-    forces = "; ".join(f"{f['name']} ({f['kind']}, {f['force_N']:g} N + {f['stiffness_N_m']:g} N/m "
-                       f"beyond {f['contact_position_mm']:g} mm, pushing {f['direction']})"
-                       for f in inp["load_forces"]) or "none"
+    if inp.get("load_unit") == "rad":  # a rotary load (report/units.py): inertia, torques, angles
+        forces = "; ".join(f"{f['name']} ({f['kind']}, {f['force_N']:g} N m + {f['stiffness_N_m']:g} N m/rad "
+                           f"beyond {math.degrees(f['contact_position_mm'] * 1e-3):g} deg, pushing "
+                           f"{f['direction']})" for f in inp["load_forces"]) or "none"
+        load = f"load: moving inertia {inp['moving_mass_kg']:g} kg m^2 (rotary, gravity off), load torques: {forces}"
+    else:
+        forces = "; ".join(f"{f['name']} ({f['kind']}, {f['force_N']:g} N + {f['stiffness_N_m']:g} N/m "
+                           f"beyond {f['contact_position_mm']:g} mm, pushing {f['direction']})"
+                           for f in inp["load_forces"]) or "none"
+        load = (f"load: moving mass {inp['moving_mass_kg']:g} kg, gravity {inp['gravity_m_s2']:g} m/s^2 along the "
+                f"axis, load forces: {forces}")
     lines = [
         f"{report['problem']} at {report['spm']:g} spm ({period_text(report['cycle_time_s'], report['spm'])}, "
         f"{inp['law']}, {inp['samples']} samples over the whole cycle)",
-        f"load: moving mass {inp['moving_mass_kg']:g} kg, gravity {inp['gravity_m_s2']:g} m/s^2 along the "
-        f"axis, load forces: {forces}",
+        load,
         f"limits: torque limit = min(motor peak, drive peak limit {inp['peak_limit_pct']:g} % x rated torque) "
         f"(column 'limit N m'; overload = peak / rated), inertia ratio <= "
         f"{inp['max_inertia_ratio']:g}; belt {inp['belt']} ({inp['belt_cord']} cord, service factor "

@@ -104,6 +104,7 @@ def _member_summary(problem, stroke: StrokeFunction, spm: float, step_angle: flo
             "interval_times": problem.timing.interval_times,
             "law": problem.default_law.name if len({m.law for m in problem.timing.moves}) == 1 else "mixed",
             "law_params": problem.default_law.params, "transmission": problem.transmission.name,
+            "load_unit": problem.timing.unit,  # "m", or "rad" for a rotary load ([timing] in deg)
             "step_angle_deg": None if step_angle is None else math.degrees(step_angle),
             "moves": moves, "intervals": intervals}
 
@@ -137,8 +138,12 @@ def _member_text(summary: dict) -> str:
     head = (f"{summary['problem']} at {summary['spm']:g} spm ({period_text(summary['cycle_time_s'], summary['spm'])}, "
             f"interval times {summary['interval_times']}), transmission {summary['transmission']}")
     head += "\nmotion law: " + ", ".join(sorted({m["law"] for m in summary["moves"]}))
-    rows = [{**r, "time_ms": r["time_s"] * 1e3} for r in summary["intervals"]]
-    cols = [c for c in KINEMATICS_COLUMNS if c[0] in ("index", "name", "stroke_mm", "direction", "span_deg", "time_ms")]
+    from .units import load_columns, with_load_stroke
+
+    rotary = summary.get("load_unit") == "rad"  # a rotary load: strokes in deg (report/units.py)
+    rows = [with_load_stroke({**r, "time_ms": r["time_s"] * 1e3}, rotary) for r in summary["intervals"]]
+    cols = load_columns([c for c in KINEMATICS_COLUMNS
+                         if c[0] in ("index", "name", "stroke_mm", "direction", "span_deg", "time_ms")], rotary)
     members = [{"interval": m["name"], **row} for m in summary["moves"] for row in m["members"]]
     step = summary["step_angle_deg"]
     note = (f"\nmotor and members in their own units (m or rad); step rate at {step:g} deg per step"

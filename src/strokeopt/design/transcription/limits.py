@@ -88,8 +88,9 @@ class JerkBound(Limit):
         b.limit_abs(lim, hull)
 
     def report(self, nlp, outcome):
+        unit = "rad/s^3" if nlp.request.problem.timing.rotary else "m/s^3"  # a rotary load's jerk (a sley's)
         return [{"name": f"jerk move {mv.index}", "value": row["jerk_max_fine_m_s3"], "limit": mv.jerk_bound,
-                 "unit": "m/s^3"}
+                 "unit": unit}
                 for mv, row in zip(nlp.request.moves, outcome.fine["moves"]) if mv.jerk_bound is not None]
 
 

@@ -1,0 +1,137 @@
+"""A sley driven directly by a servo (issue 24 item 5): a rotary load through a gearbox, positions in deg.
+
+Known optimum (seed digest C: sley swing 19.5 deg, 200 rpm, I0 = 13.42 kgf cm s^2 = 1.3165 kg m^2): a
+rest-to-rest swing of h = 19.5 deg in T = 0.130 s (156 deg of crank at 200 rpm) with ratio 1, no rotor
+inertia (1e-10 kg m^2, the catalogue's least) and no beat-up force: min_peak_accel gives the parabolic law,
+eps_max = 4 h / T^2 = 80.6 rad/s^2, and min_peak_torque I0 eps_max = 106.0 N m; the modified sine
+(chi = 0.125, C_a = 5.528) 146.6 N m."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from strokeopt import load_problem
+from strokeopt.design.solve import solve_design
+from strokeopt.drive.load import load_torque
+from strokeopt.drive.transmission import Gearbox
+from strokeopt.errors import ProblemError
+from strokeopt.motion.laws import make_law
+
+I0 = 13.42 * 9.80665 * 1e-2  # digest C: 13.42 kgf cm s^2 = 1.31605 kg m^2 (the digest: 1.3165, within 0.05 %)
+
+PROBLEM = """
+[problem]
+name = "servo sley, known optimum"
+
+[machine]
+spm = 200
+cam_revolutions_per_stitch = 1
+
+[motion]
+law = "parabolic"
+
+[timing]
+start_position_deg = 0
+
+[[timing.intervals]]
+name = "back"
+span_deg = 156
+stroke_deg = 19.5
+direction = "up"
+
+[[timing.intervals]]
+name = "rear dwell"
+span_deg = 48
+
+[[timing.intervals]]
+name = "forward"
+span_deg = 156
+stroke_deg = 19.5
+direction = "down"
+
+[transmission]
+type = "gearbox"
+ratio = 1
+
+[drive]
+motor = "no-rotor"
+catalogues = ["motor.toml"]
+moving_inertia_kg_m2 = 1.3165
+max_inertia_ratio = 1000
+
+[design]
+objective = "{objective}"
+rest_order = 1
+motor_choice = "fixed"
+"""
+
+MOTOR = """
+[[motor]]
+name = "no-rotor"
+source = "test: a rotor of 1e-10 kg m^2, nothing beside the sley's 1.3165"
+rated_speed_rpm = 3000
+rated_torque_N_m = 1000
+stall_torque_N_m = 1000
+peak_torque_N_m = 3000
+rotor_inertia_kg_cm2 = 1e-6
+"""
+
+
+def _problem(tmp_path, objective="min_peak_torque", text=PROBLEM):
+    (tmp_path / "motor.toml").write_text(MOTOR, encoding="utf-8")
+    path = tmp_path / "sley.toml"
+    path.write_text(text.replace("{objective}", objective), encoding="utf-8")
+    return load_problem(path)
+
+
+def test_units_and_gearbox(tmp_path):
+    problem = _problem(tmp_path)
+    assert problem.timing.rotary and isinstance(problem.transmission, Gearbox)
+    move = problem.timing.moves[0]
+    assert move.stroke == pytest.approx(math.radians(19.5), rel=1e-12)
+    assert problem.drive.load.moving_mass == 1.3165 and problem.drive.load.gravity == 0.0
+    # digest C: I0 = 13.42 kgf cm s^2 = 1.3165 kg m^2 (0.1 %)
+    assert I0 == pytest.approx(1.3165, rel=1e-3)
+    g = Gearbox(16.0)
+    x, mu, nu = g.transfer(np.array([0.0, 32.0]))
+    assert x[1] == pytest.approx(2.0) and np.allclose(mu, 1 / 16) and np.allclose(nu, 0.0)
+
+
+@pytest.mark.parametrize("objective", ["min_peak_accel", "min_peak_torque"])
+def test_known_optimum(tmp_path, objective):
+    # digest C: 19.5 deg in 0.130 s: eps_max = 4 h / T^2 = 80.6 rad/s^2, I0 eps_max = 106.0 N m
+    problem = _problem(tmp_path, objective)
+    assert problem.timing.schedule(200).duration[0] == pytest.approx(0.130)
+    design = solve_design(problem)
+    h, T = math.radians(19.5), 0.130
+    assert 4 * h / T**2 == pytest.approx(80.6, rel=1e-3)
+    for move in design.moves:
+        assert move.a_max == pytest.approx(80.6, rel=0.01)
+    if objective == "min_peak_torque":
+        assert design.objective_value == pytest.approx(106.0, rel=0.01)
+
+
+def test_modified_sine(tmp_path):
+    # digest C with the modified sine (chi = 0.125): 146.6 N m
+    problem = _problem(tmp_path).with_law(make_law("modified_sine"))
+    kin = problem.stroke().sample(20001)
+    terms = load_torque(problem.drive.catalogue().motors["no-rotor"], problem.transmission, problem.drive.load,
+                        kin.s, kin.v, kin.a)
+    assert float(np.max(np.abs(terms.total))) == pytest.approx(146.6, rel=0.01)
+
+
+@pytest.mark.parametrize("edit, field, words", [
+    (lambda t: t.replace("start_position_deg = 0", "start_position_deg = 0\nstart_position_mm = 0"),
+     "timing.start_position_deg", "one unit"),
+    (lambda t: t.replace('type = "gearbox"\nratio = 1', 'pulley_teeth = 28'), "transmission.type", "deg"),
+    (lambda t: t.replace("moving_inertia_kg_m2", "moving_mass_kg"), "drive.moving_mass_kg", "moving_inertia_kg_m2"),
+    (lambda t: t.replace("[drive]\n", '[drive]\nbelt = "GT3-3MR-09"\n'), "drive.belt", "gearbox"),
+    (lambda t: t.replace("[drive]\n", '[drive]\ngravity = "down"\n'), "drive.gravity", ""),
+])
+def test_refusals(tmp_path, edit, field, words):
+    with pytest.raises(ProblemError) as err:
+        _problem(tmp_path, text=edit(PROBLEM))
+    assert err.value.field == field and words in err.value.message
