@@ -141,7 +141,7 @@ def run_in(workdir, line: str) -> subprocess.CompletedProcess:
     return done[line]
 
 
-@pytest.mark.parametrize("line", [pytest.param(line, id=" ".join(line.split()[1:4]),
+@pytest.mark.parametrize("line", [pytest.param(line, id=" ".join(line.split()[1:]),
                                                marks=[pytest.mark.slow] if is_slow(line) else [])
                                   for line in command_block()])
 def test_command_block_line_runs(workdir, line):
