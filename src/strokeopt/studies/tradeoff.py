@@ -28,7 +28,7 @@ DEFAULT_ACCURACIES_MM = (0.02, 0.03, 0.05, 0.1, 0.2, 0.3, 0.5, 1.0)
 
 
 #: The stitch-rate resolutions a trade-off search takes [spm]: below 0.1 spm the rate is finer than a min_time
-#: solve settles it (design.search.refine.RATE_TOLERANCE); above 500 spm the search has no rate left between
+#: solve settles it (design/search/refine.py RATE_TOLERANCE); above 500 spm the search has no rate left between
 #: its lowest rate and the drive's limit.
 RESOLUTION_RANGE_SPM = (0.1, 500.0)
 
