@@ -135,3 +135,30 @@ def test_refusals(tmp_path, edit, field, words):
     with pytest.raises(ProblemError) as err:
         _problem(tmp_path, text=edit(PROBLEM))
     assert err.value.field == field and words in err.value.message
+
+
+def test_linkage_against_servo():
+    # issue 24 item 5: the loom's six-bar against its sley on a servo (docs/loom-servo.md); one gearbox and
+    # two motors of the catalogue entries: the 8 N m servo cannot hold the beat-up through i = 16 (576.2 / 16 =
+    # 36.0 N m > 24 N m), the 20 N m servo can
+    from pathlib import Path
+
+    from strokeopt.linkage.files import load_linkage_file
+    from strokeopt.studies.linkage_servo import compare_linkage_servo, load_gearboxes
+
+    root = Path(__file__).resolve().parents[1] / "problems"
+    servo = load_problem(root / "loom_beatup_servo.toml")
+    assert servo.timing.rotary and servo.transmission.ratio == 16.0
+    gearboxes = [g for g in load_gearboxes() if g.name == "planetary-160-i16"]
+    result = compare_linkage_servo(load_linkage_file(root / "loom_beatup_sixbar.toml"), servo, gearboxes,
+                                   motors=["AC-servo-100-8", "AC-servo-140-20"])
+    small, chosen = result.candidates
+    assert not small.feasible and "static load torque" in small.reason and small.design is None
+    assert result.chosen is chosen and chosen.motor == "AC-servo-140-20"
+    n = chosen.numbers
+    assert n["peak_torque_N_m"] == pytest.approx(1961.3 * 0.2938 / 16, rel=0.01)  # the beat-up held at the front
+    assert n["swing_deg"] == pytest.approx(19.5, abs=1e-6)
+    assert n["rear_dwell_deg"] >= result.linkage.rear_dwell["length_deg"] == pytest.approx(64.5)
+    rows = {r["quantity"]: r for r in result.table()}
+    assert rows["peak torque (crank / motor)"]["linkage"] == pytest.approx(19.31, abs=0.01)  # docs/linkages.md
+    assert rows["peak sley acceleration"]["linkage"] == pytest.approx(89.6, abs=0.1)

@@ -44,7 +44,7 @@ class Machine:
         return f"{self.motor} ({kind})" if self.motor else "no motor"
 
 
-_TRANSMISSIONS = {"belt_pulley": "belt pulley", "screw_lever": "screw and lever"}
+_TRANSMISSIONS = {"belt_pulley": "belt pulley", "screw_lever": "screw and lever", "gearbox": "gearbox"}
 
 
 def _output(problem) -> str:
@@ -60,7 +60,8 @@ def _output(problem) -> str:
         if on_last:
             return on_last[-1].name
         return last
-    return "bar"
+    timing = getattr(problem, "timing", None)
+    return "load" if getattr(timing, "rotary", False) else "bar"  # a rotary load: a sley, a turntable
 
 
 def scene_kind(problem) -> str | None:

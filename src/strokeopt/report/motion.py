@@ -182,6 +182,9 @@ def draw_kinematics(axes, problem, strokes, spm: float, n: int = 3601) -> None:
     jerk_unit = ("km/s$^3$", 1e-3) if j_peak >= 1e4 else ("m/s$^3$", 1.0)
     units = [("position", "mm", 1e3), ("velocity", "m/s", 1.0), ("acceleration", "m/s$^2$", 1.0),
              ("jerk", *jerk_unit)]
+    if problem.timing.rotary:  # a rotary load (a sley): deg, rad/s, rad/s^2, rad/s^3 (report/units.py)
+        units = [("position", "deg", 180.0 / math.pi), ("velocity", "rad/s", 1.0),
+                 ("acceleration", "rad/s$^2$", 1.0), ("jerk", "rad/s$^3$", 1.0)]
     for stroke in strokes:
         k = stroke.sample(n)
         angle = 360.0 * k.t / stroke.period

@@ -234,7 +234,7 @@ def compare_linkage_servo(linkage_problem, servo_problem, gearboxes: list[Gearbo
         try:
             design = solve_design(variant)
         except SolverError as exc:
-            cand.reason = f"no design: {exc}"
+            cand.reason = "no design: " + str(exc).splitlines()[0]
             continue
         cand.design = design
         cand.numbers = _servo_numbers(design, g)
