@@ -162,3 +162,21 @@ def test_linkage_against_servo():
     rows = {r["quantity"]: r for r in result.table()}
     assert rows["peak torque (crank / motor)"]["linkage"] == pytest.approx(19.31, abs=0.01)  # docs/linkages.md
     assert rows["peak sley acceleration"]["linkage"] == pytest.approx(89.6, abs=0.1)
+
+
+def test_hybrid_crank_speed():
+    # issue 24 item 5, the hybrid: the linkage kept, its crank on a servo at non-uniform speed (docs/loom-servo.md);
+    # the peak torque reported is checked between the points the NLP holds
+    from pathlib import Path
+
+    from strokeopt.linkage.files import load_linkage_file
+    from strokeopt.studies.linkage_servo import hybrid_crank_speed, linkage_side
+
+    lp = load_linkage_file(Path(__file__).resolve().parents[1] / "problems" / "loom_beatup_sixbar.toml")
+    lk = linkage_side(lp)
+    dwell0 = lk.rear_dwell["length_deg"] / 360 * 0.3  # 64.5 deg of crank at 200 rpm: 53.75 ms
+    peak0 = float(np.abs(lk.torque).max())
+    low = hybrid_crank_speed(lp, dwell_time_min_s=dwell0).numbers()
+    assert low["dwell_time_ms"] >= dwell0 * 1e3 - 1e-6 and low["peak_torque_N_m"] < 0.6 * peak0
+    long = hybrid_crank_speed(lp, peak_torque_max_N_m=peak0).numbers()
+    assert long["peak_torque_N_m"] <= peak0 * (1 + 1e-6) and long["dwell_time_ms"] > 2.5 * dwell0 * 1e3

@@ -12,6 +12,10 @@ before any NLP, with that reason. The linkage's numbers are its crank torque at 
 (power balance, linkage/dynamics.py): the crank is driven by the loom's main shaft and flywheel, which
 evens out its peaks; a servo motor must deliver and absorb every peak itself.
 
+:func:`hybrid_crank_speed` keeps the linkage and drives its crank by a servo at non-uniform speed (no
+flywheel), designed in crank coordinates: the least peak crank torque for a rear dwell at least as long,
+or the longest rear dwell for a peak crank torque.
+
 The caller loads the files (files/ is a floor above); the table and figure are :meth:`LinkageServo.table`
 and :func:`plot_linkage_servo`.
 """
@@ -265,8 +269,9 @@ def table_text(result: LinkageServo) -> str:
     return "\n".join(out)
 
 
-def plot_linkage_servo(result: LinkageServo, path: str | Path | None = None):
-    """Sley angle, sley acceleration, and the crank's and the motor's torque over the crank angle."""
+def plot_linkage_servo(result: LinkageServo, path: str | Path | None = None, hybrid: list | None = None):
+    """Sley angle, sley acceleration, and the crank's and the motor's torque over the crank angle; with
+    ``hybrid`` (:class:`HybridDesign` list) their crank torques too."""
     import matplotlib
 
     matplotlib.use("Agg") if path is not None else None
@@ -283,16 +288,124 @@ def plot_linkage_servo(result: LinkageServo, path: str | Path | None = None):
         axes[0].plot(sv["crank_deg"], sv["sley_deg"], label=servo_label)
         axes[1].plot(sv["crank_deg"], sv["sley_accel"], label=servo_label)
         axes[2].plot(sv["crank_deg"], sv["torque"], label=servo_label + ": motor torque")
+    for hd in hybrid or ():
+        axes[2].plot(hd.crank_deg, hd.torque, lw=1, ls="--", label=f"hybrid, crank torque: {hd.label}")
     axes[0].set_ylabel("sley angle from\nthe front, deg")
     axes[1].set_ylabel("sley acceleration\nrad/s$^2$")
     axes[2].set_ylabel("torque, N m")
-    axes[2].set_xlabel("crank angle, deg (0 = beat-up)")
+    axes[2].set_xlabel("crank angle, deg (0 = beat-up; the servo's time as the crank angle at constant speed)")
     axes[0].set_title("loom beat-up: six-bar linkage against a servo-driven sley", fontsize=10)
     for ax in axes:
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=7)
     axes[2].set_xlim(0, 360)
     if path is not None:
         fig.savefig(path, dpi=120)
         plt.close(fig)
     return fig
+
+
+@dataclass
+class HybridDesign:
+    """A servo driving the linkage's crank at non-uniform speed (no flywheel): the crank speed over the crank
+    angle, the crank torque it needs, and the time the output spends in its rear near-dwell."""
+
+    label: str
+    crank_deg: np.ndarray       # nodes [deg]
+    omega: np.ndarray           # crank speed at the nodes [rad/s]
+    torque: np.ndarray          # crank torque at the midpoints [N m]
+    power: np.ndarray           # crank power at the midpoints [W]
+    dwell_time_s: float         # time the output spends in its rear near-dwell
+    period_s: float
+
+    def numbers(self) -> dict:
+        return {"label": self.label, "peak_torque_N_m": float(np.abs(self.torque).max()),
+                "rms_torque_N_m": float(np.sqrt(np.average(self.torque ** 2, weights=self._dt))),
+                "peak_power_W": float(self.power.max()), "peak_absorbed_W": float(-self.power.min()),
+                "dwell_time_ms": self.dwell_time_s * 1e3,
+                "dwell_share_of_cycle_deg": 360 * self.dwell_time_s / self.period_s,
+                "omega_min_rad_s": float(self.omega.min()), "omega_max_rad_s": float(self.omega.max())}
+
+    @property
+    def _dt(self) -> np.ndarray:
+        h = math.radians(self.crank_deg[1] - self.crank_deg[0])
+        w = self.omega
+        return h * 0.5 * (1 / w + 1 / np.roll(w, -1))
+
+
+def hybrid_crank_speed(linkage_problem, *, dwell_time_min_s: float | None = None,
+                       peak_torque_max_N_m: float | None = None, n: int = 360,
+                       speed_range: tuple[float, float] = (0.2, 5.0)) -> HybridDesign:
+    """The hybrid: keep the linkage and drive its crank with a servo at non-uniform speed, one crank turn per
+    machine cycle, the beat-up still at crank angle 0 at time 0. Designed in the input (crank) coordinate, as a
+    crank-driven linkage has no unique inverse: the unknowns are w = omega^2 at ``n`` crank angles (periodic);
+    the crank torque is ``J(theta) theta'' + J'(theta) omega^2 / 2 + M_ext(theta) = (J w)' / 2 + M_ext`` with
+    the reduced inertia, gravity and process loads of linkage/dynamics.py (linear in w), the time of a step
+    ``h w^(-1/2)`` (trapezoidal). With ``dwell_time_min_s``: the least peak crank torque with the output at
+    least that long in its rear near-dwell (the file's criterion); with ``peak_torque_max_N_m``: the longest
+    such dwell with the peak crank torque within it. The crank speed stays within ``speed_range`` times the
+    constant speed. The rotor's inertia is left out (a gearbox of ratio i adds i^2 J_rotor to J). IPOPT."""
+    import casadi as ca
+
+    kin = kinematics_of(linkage_problem.linkage)
+    cycle = kin.solve(8 * n)  # the terms at eighth steps: the NLP holds them at every quarter of each step
+    omega0 = linkage_problem.omega
+    dyn = analyse_dynamics(kin, cycle, omega0)
+    J, dJ, ext = dyn.J, dyn.dJ, dyn.gravity_torque + dyn.load_torque
+    theta = cycle.theta[0::8]
+    h = 2 * math.pi / n
+    period = 2 * math.pi / omega0
+    y, *_ = kin.output(cycle, "sley_angle")
+    rear = next(d for d in near_dwells(cycle.theta, y, linkage_problem.near_dwell_pct / 100) if d["at"] == "maximum")
+    lo, hi = math.radians(rear["from_deg"]), math.radians(rear["to_deg"])
+    mid = (theta + h / 2) % (2 * math.pi)
+    in_dwell = ((mid - lo) % (2 * math.pi)) <= ((hi - lo) % (2 * math.pi))
+
+    def torque_at(w_k, w_next, frac: float, offset: int, right_limit: bool = False):
+        """The crank torque at ``frac`` of every step (w linear on the step: theta'' = w'/2 constant); with
+        ``right_limit`` the load just after the node (a process load that ends at a node, as the beat-up
+        at 360 = 0 deg, jumps there: both sides are held)."""
+        ww = (1 - frac) * w_k + frac * w_next
+        idx = (np.arange(n) * 8 + offset) % (8 * n)
+        load = 2 * ext[(idx + 1) % (8 * n)] - ext[(idx + 2) % (8 * n)] if right_limit else ext[idx]
+        return 0.5 * (dJ[idx] * ww + J[idx] * (w_next - w_k) / h) + load
+
+    opti = ca.Opti()
+    w = opti.variable(n)
+    w_next = ca.vertcat(w[1:], w[0])
+    torque = ca.vertcat(*(torque_at(w, w_next, q / 4, 2 * q) for q in range(5)), torque_at(w, w_next, 0.0, 0, True))
+    inv = 1 / ca.sqrt(w)
+    dt = h * 0.5 * (inv + ca.vertcat(inv[1:], inv[0]))
+    opti.subject_to(ca.sum1(dt) == period)
+    dwell = ca.sum1(dt * in_dwell)
+    opti.subject_to(opti.bounded((speed_range[0] * omega0) ** 2, w, (speed_range[1] * omega0) ** 2))
+    smooth = 1e-9 * ca.sumsqr(w_next - w)  # a tie between neighbours: no odd-even modes
+    if dwell_time_min_s is not None:
+        tau = opti.variable()
+        opti.subject_to(opti.bounded(-tau, torque, tau))
+        opti.subject_to(dwell >= dwell_time_min_s)
+        opti.minimize(tau + smooth)
+        opti.set_initial(tau, float(np.abs(dyn.torque).max()))
+        label = f"least peak torque, dwell >= {dwell_time_min_s * 1e3:.2f} ms"
+    elif peak_torque_max_N_m is not None:
+        opti.subject_to(opti.bounded(-peak_torque_max_N_m, torque, peak_torque_max_N_m))
+        opti.minimize(-dwell / period + smooth)
+        label = f"longest dwell, peak torque <= {peak_torque_max_N_m:.2f} N m"
+    else:
+        raise ValueError("give dwell_time_min_s or peak_torque_max_N_m")
+    opti.set_initial(w, omega0 ** 2)
+    opti.solver("ipopt", {"print_time": False}, {"print_level": 0, "sb": "yes", "max_iter": 3000, "tol": 1e-10})
+    try:
+        sol = opti.solve()
+    except RuntimeError as exc:
+        raise SolverError(f"hybrid crank speed ({label}): IPOPT failed: {exc}") from None
+    wv = np.asarray(sol.value(w)).ravel()
+    # checked at every eighth of a step (half of them between the points the NLP holds), w linear on each step
+    wn = np.roll(wv, -1)
+    w_fine = np.empty(8 * n)
+    tq = np.empty(8 * n)
+    for q in range(8):
+        w_fine[q::8] = (1 - q / 8) * wv + q / 8 * wn
+        tq[q::8] = 0.5 * (dJ[q::8] * w_fine[q::8] + J[q::8] * (wn - wv) / h) + ext[q::8]
+    return HybridDesign(label, np.degrees(cycle.theta), np.sqrt(w_fine), tq, tq * np.sqrt(w_fine),
+                        float(sol.value(dwell)), period)
