@@ -68,8 +68,9 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
         load,
         f"limits: torque limit = min(motor peak, drive peak limit {inp['peak_limit_pct']:g} % x rated torque) "
         f"(column 'limit N m'; overload = peak / rated), inertia ratio <= "
-        f"{inp['max_inertia_ratio']:g}; belt {inp['belt']} ({inp['belt_cord']} cord, service factor "
-        f"{inp['belt_service_factor']})",
+        f"{inp['max_inertia_ratio']:g}; " + (f"belt {inp['belt']} ({inp['belt_cord']} cord, service factor "
+                                             f"{inp['belt_service_factor']})" if inp['belt'] is not None
+                                             else "no belt checked"),
         "ranked: feasible first, then by overload (peak / rated torque); 'binding' = the check with the "
         "least margin\n",
     ]
