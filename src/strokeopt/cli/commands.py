@@ -305,8 +305,9 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_verify(args) -> int:
-    from ..contact.verify import verify
-    from ..files.design_file import DesignStroke, design_problem_file
+    from ..design.result import design_from_data
+    from ..files.design_file import design_problem_file
+    from ..studies.verified import verify_design
 
     if args.design is None:  # verify DESIGN.json [--problem FILE]: the problem recorded in the design
         from ..files.design_file import read_design
@@ -319,12 +320,15 @@ def cmd_verify(args) -> int:
     else:
         args.problem = args.file
     problem = _load(args)
-    design = DesignStroke(problem, args.design_stroke, problem.spm, str(args.design), args.design_data.get("objective"))
+    design = design_from_data(problem, args.design_data, args.design_stroke)
     scene = _scene_name(args, problem)
-    result = verify(design, scene, _sim_options(args))
-    block = _verification(problem, result, args.design_data)
+    # the library's judgement (studies/verified.py): the full servo simulation made again on this problem, the
+    # design judged in this scene by the problem's [design.contact] limits
+    verified = verify_design(design, scene=scene, options=_sim_options(args))
+    result, block = verified.scenes[scene], verified.verification
     _report_scene(args, problem, scene, result, {"design": str(args.design), "objective": design.objective,
-                                                 "verification": block}, kind="verify", status=block["status"])
+                                                 "verification": block, "verdict": verified.verdict},
+                  kind="verify", status=block["status"])
     if not args.json:
         from ..report.contact import verification_text
 
@@ -333,14 +337,3 @@ def cmd_verify(args) -> int:
         print(f"strokeopt: {block['verdict']}", file=sys.stderr)
         return 1
     return 0
-
-
-def _verification(problem, result, design_data: dict) -> dict:
-    """The verification block of ``verify``: the limits of the problem's [design.contact], the design's handover check."""
-    from ..contact.verify import verification
-
-    contact = problem.design.contact if problem.design is not None else None
-    handover = next((c for c in design_data.get("checks", []) if str(c.get("name", "")).startswith("handover accuracy")),
-                    None)
-    return verification(result, None if contact is None else contact.lag_max,
-                        None if contact is None else contact.impact_velocity_max, handover)

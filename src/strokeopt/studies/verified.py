@@ -110,19 +110,23 @@ def solve_verified(problem, *, objective: str | None = None, spm: float | None =
     return verify_design(design, accuracy=held.get("accuracy"), compare=compare, scenes=scenes, options=options)
 
 
-def verify_design(design, *, accuracy=None, compare: bool = False, scenes=None, options=None) -> VerifiedDesign:
+def verify_design(design, *, accuracy=None, compare: bool = False, scenes=None, options=None,
+                  scene: str | None = None) -> VerifiedDesign:
     """Judge a solved :class:`~strokeopt.design.result.Design` (a design.json is read back into one by
-    ``design_from_data``): its full servo simulation (``accuracy`` if already made), its contact verification,
-    the scenes ``scenes`` beside it, one status, one verdict."""
+    ``design_from_data``): its full servo simulation (``accuracy`` if already made; a simulation made here
+    replaces the handover row the design carries, so a design judged on a changed problem -- ``--set`` -- is
+    judged by its own numbers), its contact verification in ``scene`` (default: the design's), the scenes
+    ``scenes`` beside it, one status, one verdict."""
     problem = design.problem
     if accuracy is None and getattr(problem, "servo", None) is not None and design.motor_spec is not None:
         from ..servo.accuracy import design_accuracy
 
         accuracy = design_accuracy(design)
+        design = _with_handover(design, accuracy.handover_error)
     results: dict = {}
     block = None
     if getattr(problem, "scenes", None):
-        own = _design_scene(design)
+        own = scene or _design_scene(design)
         results[own] = verify(design, own, options)
         block = design_verification(design, own, options, result=results[own])
         for name in scenes or ():
@@ -133,6 +137,21 @@ def verify_design(design, *, accuracy=None, compare: bool = False, scenes=None, 
     unjudged = _unjudged(block)
     return VerifiedDesign(design, accuracy, block, results, compare_with_laws(design) if compare else [],
                           design.status, _verdict(design, block, unjudged), unjudged)
+
+
+def _with_handover(design, error: float):
+    """``design`` with its handover check row holding ``error`` [m] of a full simulation made now (the pass
+    rule of the solve: within the limit and its check tolerance), the design's own term kept beside it."""
+    rows = [c for c in design.checks if c["name"].startswith("handover accuracy")]
+    if not rows or design.settings is None:
+        return design
+    row = dict(rows[-1])
+    limit = float(row["limit"])
+    row.update(name="handover accuracy (full servo simulation)", value=error * 1e3,
+               margin=1.0 - error * 1e3 / limit if limit > 0 else float("-inf"),
+               ok=bool(error * 1e3 <= limit * (1 + design.settings.check_tolerance)))
+    row.setdefault("design_term", sum(float(c["value"]) for c in rows))
+    return replace(design, checks=[c for c in design.checks if c not in rows] + [row])
 
 
 def _design_scene(design) -> str:
