@@ -164,3 +164,15 @@ def test_synthesis_section_is_checked_at_load(capsys, tmp_path):
     # README: misspelt keys are errors (here in [synthesis], refused before any work)
     text = BLIND.read_text().replace("rms_max_m_s = 0.06", "rms_max_m_s = 0.06\nrms_maximum = 1")
     _one_line_error(capsys, ["linkage", _variant(tmp_path, text)], "synthesis.rms_maximum", angle=False)
+
+
+def test_a_problem_of_another_machine_is_named(capsys):
+    # before: "machine.rpm: is required but missing" for the needle-bar problem (a new user's mistake)
+    from pathlib import Path
+
+    from strokeopt.cli.main import main
+
+    reference = Path(__file__).resolve().parents[1] / "problems" / "deco2000_needle_bar.toml"
+    assert main(["linkage", str(reference), "--plot", "none"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "transmission.type" in err[0] and "is belt_pulley" in err[0]

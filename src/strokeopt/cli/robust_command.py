@@ -15,10 +15,10 @@ def add_robust_parser(sub, problem_parent, drive_options, runner_options, plot_o
                        description="Will the machines we build meet the limits? The design's stroke (--design "
                                    "DESIGN.json, else solved now) is judged on sampled machines whose parts scatter "
                                    "as --tolerance says (any numeric field of the problem by its --set path; "
-                                   "FIELD=±X%% relative, FIELD=±X in the field's unit, ':normal' for ±3 sigma), "
+                                   "FIELD=±X% relative, FIELD=±X in the field's unit, ':normal' for ±3 sigma), "
                                    "drawn by a seeded Sobol or Latin-hypercube sample: each sample through the full "
                                    "servo simulation, the contact scene and the drive checks. Prints the yield (the "
-                                   "share meeting every limit the problem sets, with its 95 %% interval), the worst "
+                                   "share meeting every limit the problem sets, with its 95 % interval), the worst "
                                    "samples and the Spearman rank correlation of each tolerance with each result. "
                                    "The same seed gives the same numbers, on one worker or many.",
                        epilog="Example: strokeopt robust problems/deco2000_needle_bar.toml --spm 600 "
@@ -57,6 +57,9 @@ def cmd_robust(args) -> int:
 
     samples = _whole(args.samples, "--samples", *SAMPLES_RANGE)
     seed = _whole(args.seed, "--seed", 0, 2**32 - 1)
+    if not args.tolerance:  # before any work
+        raise ProblemError("--tolerance", "", "name at least one tolerance, e.g. --tolerance "
+                                              "'model.springs.k2.stiffness_N_m=±10%'")
     problem = _load(args, fix_in_design=True)
     tolerances = [parse_tolerance(t, problem) for t in args.tolerance]
     runner = study_runner(args.workers, args.scheduler, tasks=samples)  # an unreachable scheduler: before any work
@@ -64,9 +67,6 @@ def cmd_robust(args) -> int:
         design = design_from_data(problem, args.design_data, args.design_stroke)
     else:
         design = solve_verified(problem, compare=False).design
-    if not tolerances:
-        raise ProblemError("--tolerance", "", "name at least one tolerance, e.g. --tolerance "
-                                              "'model.springs.k2.stiffness_N_m=±10%'")
     progress = progress_bar(args, "samples", "sample")
     report = robust_study(design, tolerances, samples, seed=seed, method=args.method, runner=runner,
                           progress=progress)

@@ -52,6 +52,11 @@ def load_linkage_file(path, overrides: list[str] | None = None, check_cycle: boo
     except tomllib.TOMLDecodeError as exc:
         raise ProblemError(file, "", f"not valid TOML: {exc}") from None
     overridden = apply_overrides(data, list(overrides or []), file)
+    kind = data.get("transmission", {}).get("type") if isinstance(data.get("transmission"), dict) else None
+    if kind != "linkage":  # a problem of another machine: say so before asking for a linkage's fields
+        raise ProblemError(file, "transmission.type", f"is {kind or 'belt_pulley (the default)'!s}: strokeopt linkage "
+                                                      "reads a linkage problem file ([transmission] type = \"linkage\", "
+                                                      "e.g. problems/loom_beatup_sixbar.toml)")
     top = Fields(data, file, overridden=overridden)
     prob = top.table("problem")
     name = prob.string("name")

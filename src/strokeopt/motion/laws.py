@@ -262,7 +262,9 @@ def make_law(name: str, *, where: tuple[str, str] = ("<law>", "law"), **params: 
     if unknown:
         extra = ", ".join(sorted(unknown))
         allowed = ", ".join(spec.params) or "none"
-        raise ProblemError(file, fld, f"law {name!r} takes no parameter {extra} (parameters: {allowed})")
+        table = fld.rsplit(".", 1)[0] + "." if "." in fld else ""  # "motion.law" -> the parameter is "motion.chi"
+        hint = (f": remove it with --set {table}{sorted(unknown)[0]}=null, or use --law {name}" if table else "")
+        raise ProblemError(file, fld, f"law {name!r} takes no parameter {extra} (parameters: {allowed}){hint}")
     full = {}
     table = fld.rsplit(".", 1)[0] + "." if "." in fld else ""  # "motion.law" -> the parameter is "motion.chi"
     for pname, (default, lo, hi, lo_open) in spec.params.items():
