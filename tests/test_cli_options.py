@@ -69,3 +69,15 @@ def test_solve_law_and_strict(capsys):
     assert err.strip().startswith("strokeopt: --strict: solved, 2 criteria not judged")
     # --law sets every move's law, so the jerk bound taken from the law is poly5's
     assert data["status"] == "optimal" and data["verdict"] != default["verdict"]
+
+
+def test_set_reaches_ipopt_options(capsys):
+    # before: IPOPT options could be set in the file only ("ipopt.max_iter" = 500 in [design.solver])
+    from strokeopt import load_problem
+
+    known = PROBLEMS / "known_optima" / "min_jerk.toml"
+    p = load_problem(known, ["design.solver.ipopt.tol=1e-10"])
+    assert p.design.solver_options == {"ipopt.tol": 1e-10}
+    assert main(["kinematics", str(known), "--set", "design.solver.ipopt.nope=1", "--plot", "none"]) == 2
+    err = capsys.readouterr().err
+    assert "design.solver.ipopt.nope: unknown solver option" in err

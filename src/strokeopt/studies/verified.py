@@ -197,6 +197,6 @@ def _verdict(design, block: dict | None, unjudged: tuple) -> str:
         return (f"solved, {len(unjudged)} criteria not judged{where}: {values} (no limit: set {fields}); "
                 f"met: {', '.join(met) or 'the design limits'}{also}")
     if block is None and handover is None:
-        return f"solved: {len(judged)} design limits met on the rigid model; nothing re-simulated " \
-               "(no [servo] section, no scenes)"
+        limits = f"{len(judged)} design limits met on the rigid model" if judged else "no limit to check"
+        return f"solved: {limits}; nothing re-simulated (no [servo] section, no scenes)"
     return f"verified{where}: " + ", ".join(met + [f"{len(judged)} design limits met"]) + also

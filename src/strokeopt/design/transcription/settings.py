@@ -146,9 +146,13 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
     if solver is not None:
         for key in list(solver.data):
             value = solver.raw(key)
-            if not isinstance(value, (int, float, str, bool)):
-                raise solver.error(key, f"solver options must be numbers, strings or booleans, got {value!r}")
-            options[key] = value
+            # a table is the dotted names written as keys: [design.solver.ipopt] max_iter = 500, or
+            # --set design.solver.ipopt.max_iter=500, is "ipopt.max_iter" = 500
+            flat = _dotted(key, value) if isinstance(value, dict) else {key: value}
+            for name, item in flat.items():
+                if not isinstance(item, (int, float, str, bool)):
+                    raise solver.error(name, f"solver options must be numbers, strings or booleans, got {item!r}")
+            options.update(flat)
         solver.finish()
         problem = check_solver_options(options)  # asks the solver itself, before any build
         if problem is not None:
@@ -161,6 +165,15 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
     return DesignSettings(objective, n, d, rest, jerk, from_law, accuracy, motor_choice, pulley, zmin, zmax,
                           check_points, check_tol, refinements, pulley_inertia, options, contact, free, pull_out,
                           reserve, law_spm, prune_catalogue=prune_catalogue)
+
+
+def _dotted(prefix: str, table: dict) -> dict:
+    """``{"ipopt": {"max_iter": 3}}`` under ``prefix`` as CasADi's dotted option names: ``{"ipopt.max_iter": 3}``."""
+    out = {}
+    for key, value in table.items():
+        name = f"{prefix}.{key}"
+        out.update(_dotted(name, value) if isinstance(value, dict) else {name: value})
+    return out
 
 
 def parse_free(f) -> tuple:
