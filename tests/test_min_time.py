@@ -134,7 +134,8 @@ def test_cli_solve_min_time_json(capsys):
 #: accurate stroke at each grid rate (min_handover_error) and finds higher rates the full simulation confirms.
 @pytest.mark.slow
 def test_tradeoff_min_time_agrees_with_the_bisection(reference):
-    from strokeopt.studies.tradeoff import tradeoff_optimal, tradeoff_optimal_bisection
+    from strokeopt.studies.tradeoff import tradeoff_optimal
+    from tradeoff_bisection import tradeoff_optimal_bisection
 
     lines = []
     (new,) = tradeoff_optimal(reference, [0.5e-3], resolution=2, progress=lambda step, text: lines.append(text))

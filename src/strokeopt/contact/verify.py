@@ -10,6 +10,7 @@ same results ``strokeopt simulate`` reports for a classic law. It takes the
 
 from __future__ import annotations
 
+from ..drive.checks import within_limit
 from .simulate import SceneResult, SimulationOptions, simulate_scene
 
 
@@ -48,7 +49,7 @@ def verification(result: SceneResult, lag_max: float | None = None, impact_veloc
     if m["impact_velocity_m_s"] is not None:
         v = abs(m["impact_velocity_m_s"])
         rows.append(_row("impact velocity", v, impact_velocity_max, "m/s", None if impact_velocity_max is None
-                         else bool(v <= impact_velocity_max * (1 + IMPACT_TOLERANCE))))
+                         else within_limit(v, impact_velocity_max, IMPACT_TOLERANCE)))
     if handover is not None:
         rows.append(_row("handover accuracy", handover["value"], handover["limit"], "mm", bool(handover["ok"])))
     rows += [_row(criterion, value, None, unit, None) for criterion, value, unit in reported]

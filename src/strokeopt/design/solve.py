@@ -49,6 +49,7 @@ from .result import Design, stroke_from_solutions
 from .transcription.settings import DesignSettings
 from .transcription.solver import solver_options as _solver_options
 from ..drive.selection import resolve_drive
+from ..drive.checks import within_limit
 from ..errors import ProblemError, SolverError
 from ..io.plain import format_value
 
@@ -260,7 +261,7 @@ def _verified_handover(design: Design, value: float, what: str, tol: float) -> l
     limit = float(terms[0]["limit"])
     row = {"name": f"{HANDOVER_CHECK} ({what})", "value": value * 1e3, "limit": limit, "unit": "mm",
            "margin": 1.0 - value * 1e3 / limit if limit > 0 else -math.inf,
-           "ok": bool(value * 1e3 <= limit * (1 + tol)), "design_term": sum(float(c["value"]) for c in terms)}
+           "ok": within_limit(value * 1e3, limit, tol), "design_term": sum(float(c["value"]) for c in terms)}
     return [c for c in design.checks if c not in terms] + [row]
 
 
@@ -287,7 +288,7 @@ def _report_checks(best: Outcome) -> tuple[list[dict], list[str]]:
             c["ok"] = bool(value >= limit - tol * scale)
             continue
         c["margin"] = 1.0 - value / limit if limit > 0 else (-math.inf if value > 0 else 0.0)
-        c["ok"] = bool(value <= limit * (1 + tol))
+        c["ok"] = within_limit(value, limit, tol)
     active = []
     # active limit groups: the largest scaled residual of each group within 1e-4 of its bound
     for (lim, _), g in zip(nlp.built.limits, nlp.limit_values(best.x)):

@@ -96,6 +96,15 @@ class BeltLoad:
     breaking_load: float  # peak_tension_factor * T_e * safety [N]
 
 
+def within_limit(value: float, limit: float, tolerance: float = 0.0) -> bool:
+    """The one pass rule of every upper limit strokeopt judges: ``value`` meets ``limit`` when it exceeds it by
+    no more than ``tolerance`` (relative: a design's ``[design] check_tolerance``, the violation between
+    collocation nodes it accepts; an impact velocity's 2 % of the rigid cluster against the simulation; 0 for
+    a classic law's table). The design's check rows, its full servo simulation, the contact verdict, the
+    trade-off and the report all use it."""
+    return bool(value <= limit * (1.0 + tolerance))
+
+
 def torque_limit(motor, limits: DriveLimits) -> float:
     """The torque limit of ``motor`` on its drive [N m]: ``min(motor peak, drive peak limit x rated)``.
 

@@ -13,6 +13,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..drive.checks import within_limit
 from ..drive.sizing import bisect_highest
 from ..errors import ProblemError, SolverError
 from ..servo.accuracy import TORQUE_BASIS, handover_accuracy
@@ -104,11 +105,11 @@ def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step
     for acc in accuracies:
         def ok(x, acc=acc):
             e, sat = evaluate(x)
-            return e <= acc and not sat
+            return within_limit(e, acc) and not sat  # a classic law's table: no tolerance
         prev = None
         fail = None
         for spm, e, sat in errors:
-            if e <= acc and not sat:
+            if within_limit(e, acc) and not sat:
                 prev = spm
             else:
                 fail = (spm, "torque_limit" if sat else "handover_accuracy")
@@ -188,12 +189,13 @@ def _confirm(problem, design, spm: float, acc: float) -> _Trial:
     instants of the handover window, and between two of them the error may peak that much higher."""
     res = handover_accuracy(problem, design.stroke, spm)
     tol = design.settings.check_tolerance if design.settings is not None else 0.0
-    excess = max(res.handover_error / (acc * (1 + tol)), res.peak_torque_command / res.torque_limit) - 1.0
+    excess = max(res.handover_error / (acc * (1 + tol)), res.peak_torque_command / res.torque_limit) - 1.0  # <= 0:
+    # within_limit(error, acc, tol) and the torque command within its limit
     reason = ""
     if res.torque_limited:
         reason = (f"torque limit: the servo's torque command reaches {res.peak_torque_command:.2f} N m, "
                   f"limit {res.torque_limit:.2f} N m")
-    elif res.handover_error > acc * (1 + tol):
+    elif not within_limit(res.handover_error, acc, tol):
         reason = f"handover accuracy: the full simulation of the design gives {res.handover_error * 1e3:.4f} mm"
     return _Trial(spm, excess, reason, design, res)
 
@@ -246,7 +248,7 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
             points[acc] = TradeoffPoint(acc, "optimal", None, "handover_accuracy", None,
                                         "a looser accuracy has no confirmed rate")
             continue
-        if confirmed is not None and confirmed.result.handover_error <= acc:
+        if confirmed is not None and within_limit(confirmed.result.handover_error, acc):
             # the looser accuracy's design meets this one too, and its rate bounds this one's
             looser = points[prev_acc]
             points[acc] = replace(looser, accuracy=acc, detail=looser.detail + f" (the design of {prev_acc * 1e3:g} mm)")
@@ -379,86 +381,6 @@ def _search_below(problem, hi: _Trial, settings, acc: float, resolution: float, 
         if math.isfinite(t.excess):
             last.append(t)
     return lo, hi
-
-
-def tradeoff_optimal_bisection(problem, accuracies=None, *, resolution: float = 10.0, lowest: float = 100.0,
-                     start: float | None = None, progress=None) -> list[TradeoffPoint]:
-    """Highest stitch rate with the optimal stroke by bisection (the reference of
-    :func:`tradeoff_optimal`, kept for the tests): ``design.solve_design`` with the handover
-    accuracy constraint, which includes :class:`.kernel.ServoErrorTerm`, for each accuracy [m].
-
-    Bisection on the rate, one design solve per trial (warm-started). A rate
-    counts only when the design solves *and* its full simulation
-    (:func:`handover_accuracy`: table sampling, load forces, the handover
-    window) meets the accuracy without the torque command passing its limit:
-    the design's own term sees the end of the move with a continuous
-    reference only. The binding limit is what fails just above the highest rate. Tighter accuracies are solved first; a looser accuracy
-    starts from the rate the tighter one reached (the curve is monotone). The
-    motor and pulley are the problem's (``drive.motor``, ``pulley_teeth``), as
-    for the classic law, so the two curves compare strokes on one drive.
-    """
-    from ..design.transcription.settings import DesignSettings
-    from ..design.solve import solve_design
-
-    accuracies = sorted(a * 1e-3 for a in DEFAULT_ACCURACIES_MM) if accuracies is None else sorted(accuracies)
-    base = problem.design or DesignSettings()
-    start = problem.spm if start is None else start
-    points = []
-    lo_known = None
-    warm = None
-    for acc in accuracies:
-        if progress:
-            progress(f"optimal {acc * 1e3:g} mm", "bisection")
-        # the same drive as the classic law: the problem's motor and pulley
-        settings = replace(base, accuracy=acc, motor_choice="fixed", pulley="fixed")
-        reasons: dict = {}
-        designs: dict = {}
-
-        def ok(spm, settings=settings, acc=acc):
-            nonlocal warm
-            try:
-                d = solve_design(problem, spm=spm, settings=settings, warm_start=warm)
-            except SolverError as exc:
-                reasons[round(spm, 6)] = exc.reason
-                return False
-            warm = d
-            # the design's accuracy term is the loop with a continuous reference at the end of the move:
-            # the rate counts only if the full simulation (table, load forces, window) agrees
-            res = handover_accuracy(problem, d.stroke, spm)
-            if res.torque_limited:
-                reasons[round(spm, 6)] = (f"torque limit: the servo's torque command reaches "
-                                          f"{res.peak_torque_command:.2f} N m, limit {res.torque_limit:.2f} N m")
-                return False
-            if res.handover_error > acc:
-                reasons[round(spm, 6)] = (f"handover accuracy: the full simulation of the design gives "
-                                          f"{res.handover_error * 1e3:.4f} mm")
-                return False
-            designs[spm] = (d, res)
-            return True
-
-        lo = lo_known if lo_known is not None else None
-        if lo is None:
-            x = start
-            while x >= lowest and not ok(x):
-                x /= 1.5
-            lo = x if x >= lowest else None
-        if lo is None:
-            reason = reasons.get(round(x * 1.5, 6), "")
-            points.append(TradeoffPoint(acc, "optimal", None, _binding_of(reason), None, reason))
-            continue
-        hi = lo * 1.25
-        while ok(hi):
-            lo, hi = hi, hi * 1.25
-        found = bisect_highest(ok, lo, hi, resolution)[0]
-        max_spm = math.floor(found / resolution) * resolution
-        fail_reason = reasons.get(min(reasons, key=lambda k: abs(k - found)), "") if reasons else ""
-        error, detail = None, fail_reason
-        if found in designs:
-            error = designs[found][1].handover_error
-            detail = f"at {found:.1f} spm the full simulation gives {error * 1e3:.4f} mm; above: {fail_reason}"
-        points.append(TradeoffPoint(acc, "optimal", max_spm, _binding_of(fail_reason), error, detail))
-        lo_known = max_spm
-    return points
 
 
 def tradeoff(problem, accuracies=None, *, strokes: str = "both", resolution: float = 10.0, step: float = 50.0,

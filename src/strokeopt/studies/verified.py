@@ -20,6 +20,7 @@ from typing import Any
 from ..contact.verify import LIMIT_FIELDS, design_verification, verify
 from ..design.compare import compare_with_laws
 from ..design.result import design_summary
+from ..drive.checks import within_limit
 from ..design.solve import solve_design
 
 
@@ -149,7 +150,7 @@ def _with_handover(design, error: float):
     limit = float(row["limit"])
     row.update(name="handover accuracy (full servo simulation)", value=error * 1e3,
                margin=1.0 - error * 1e3 / limit if limit > 0 else float("-inf"),
-               ok=bool(error * 1e3 <= limit * (1 + design.settings.check_tolerance)))
+               ok=within_limit(error * 1e3, limit, design.settings.check_tolerance))
     row.setdefault("design_term", sum(float(c["value"]) for c in rows))
     return replace(design, checks=[c for c in design.checks if c not in rows] + [row])
 
