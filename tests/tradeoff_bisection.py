@@ -1,6 +1,6 @@
 """The trade-off's reference search (tests only): the highest rate of the optimal stroke by bisection on the
 rate, one design solve per trial, each confirmed by the full servo simulation. ``strokeopt tradeoff`` uses the
-min_time continuation of :func:`strokeopt.studies.tradeoff.tradeoff_optimal`; tests/test_min_time.py holds the
+min_time continuation of :func:`strokeopt.studies.tradeoff.tradeoff_optimal`; tests/design/test_min_time.py holds the
 two against each other."""
 
 from __future__ import annotations

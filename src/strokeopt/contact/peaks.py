@@ -30,8 +30,8 @@ them, for every element of the scene and for the drive force:
    estimate covers the integration of the spike itself, not an error carried into it from earlier
    in the cycle (at rtol 1e-3 the release scene's c31 peak is 13 % high and estimated at 0.02 %).
 
-Measured (tests/test_contact_peaks.py): at the default tolerance every peak of the release scene
-(500 and 600 spm) and of the hard cases of tests/test_simulate.py is within 0.8 % of the same scene
+Measured (tests/contact/test_contact_peaks.py): at the default tolerance every peak of the release scene
+(500 and 600 spm) and of the hard cases of tests/contact/test_simulate.py is within 0.8 % of the same scene
 at rtol 1e-10, and within 1 % of a brute-force run on 200 000 output points per stroke piece
 (release, 500 spm); the scene takes 1.3 times its CPU time without the peaks (release), 2 times in
 the handover scene (its 0.2 g needle chatters: 30-40 intervals refined).

@@ -194,7 +194,7 @@ def drive_reference(problem) -> tuple[float, float]:
     return (1.0 if move.stroke > 0 else -1.0), move.start_position
 
 
-_drive_reference = drive_reference  # the name tests/test_scene.py imports
+_drive_reference = drive_reference  # the name tests/contact/test_scene.py imports
 
 
 def _integrator(ode, opts: SimulationOptions, grid: np.ndarray, refine: bool = False, max_steps: int = 200_000):

@@ -15,7 +15,7 @@ The loop (:mod:`.loop`) is a continuous-time state space; this module gives it
   python-control's ``stability_margins``).
 
 python-control is not imported: importing it (scipy.signal, matplotlib) took longer than a
-design's whole servo computation. ``tests/test_servo_lti.py`` checks these functions against
+design's whole servo computation. ``tests/servo/test_servo_lti.py`` checks these functions against
 python-control where it is installed.
 """
 

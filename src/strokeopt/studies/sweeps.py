@@ -34,7 +34,7 @@ def sweep_design(problem, spms, *, objective: str | None = None, settings: Desig
     the rates are split into N contiguous runs solved side by side; each run's first rate starts cold (as
     ``strokeopt solve --spm RATE`` solves it) and the others are warm-started within their run. Where the
     optimum is unique the table is the same to the solver's tolerance (the known optima: 1e-6 relative,
-    tests/test_runner.py); where the start decides which local optimum IPOPT finds, a run's first rate may
+    tests/studies/test_runner.py); where the start decides which local optimum IPOPT finds, a run's first rate may
     differ from the chain's: the reference problem on the thesis drive at 520 spm, warm-started from 500 spm,
     0.94399 N m peak torque, solved cold 0.94506 N m (0.11 %; `strokeopt bench --only study_sweep_workers`
     prints the largest difference of its sweep). A rate whose task fails (an error, not an infeasible rate) is

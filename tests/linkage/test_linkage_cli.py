@@ -172,7 +172,7 @@ def test_a_problem_of_another_machine_is_named(capsys):
 
     from strokeopt.cli.main import main
 
-    reference = Path(__file__).resolve().parents[1] / "problems" / "deco2000_needle_bar.toml"
+    reference = Path(__file__).resolve().parents[2] / "problems" / "deco2000_needle_bar.toml"
     assert main(["linkage", str(reference), "--plot", "none"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "transmission.type" in err[0] and "is belt_pulley" in err[0]

@@ -11,7 +11,7 @@ import pytest
 from strokeopt.cli.main import main
 from strokeopt.files.design_file import read_design
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 KNOWN = ROOT / "problems" / "known_optima"
 REFERENCE = ROOT / "problems" / "deco2000_needle_bar.toml"
 

@@ -155,7 +155,7 @@ def test_smoothing_is_not_a_command_line_option(capsys, reference_path, command)
 def test_integrator_failure_is_one_line_of_strokeopt(capfd, reference_path):
     # the lightest body on the stiffest undamped contact of the plausible ranges makes CVODES fail; SUNDIALS'
     # own "At t = ..." must not reach the user (a budget of 1e8 steps lets it past the check of its contact period,
-    # tests/test_contact_peaks.py, to the integrator)
+    # tests/contact/test_contact_peaks.py, to the integrator)
     assert main(["simulate", str(reference_path), "--set", "model.bodies.control.mass_g=1e-3", "--set",
                  "model.contacts.c21.stiffness_N_m=1e12", "--set", "model.contacts.c21.damping_N_s_m=0",
                  "--set", "scenes.release.max_steps=1e8", "--plot", "none"]) == 1

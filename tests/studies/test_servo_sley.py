@@ -146,7 +146,7 @@ def test_linkage_against_servo():
     from strokeopt.linkage.files import load_linkage_file
     from strokeopt.studies.linkage_servo import compare_linkage_servo, load_gearboxes
 
-    root = Path(__file__).resolve().parents[1] / "problems"
+    root = Path(__file__).resolve().parents[2] / "problems"
     servo = load_problem(root / "loom_beatup_servo.toml")
     assert servo.timing.rotary and servo.transmission.ratio == 16.0
     gearboxes = [g for g in load_gearboxes() if g.name == "planetary-160-i16"]
@@ -172,7 +172,7 @@ def test_hybrid_crank_speed():
     from strokeopt.linkage.files import load_linkage_file
     from strokeopt.studies.linkage_servo import hybrid_crank_speed, linkage_side
 
-    lp = load_linkage_file(Path(__file__).resolve().parents[1] / "problems" / "loom_beatup_sixbar.toml")
+    lp = load_linkage_file(Path(__file__).resolve().parents[2] / "problems" / "loom_beatup_sixbar.toml")
     lk = linkage_side(lp)
     dwell0 = lk.rear_dwell["length_deg"] / 360 * 0.3  # 64.5 deg of crank at 200 rpm: 53.75 ms
     peak0 = float(np.abs(lk.torque).max())

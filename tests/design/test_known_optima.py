@@ -11,7 +11,7 @@ import pytest
 from strokeopt import load_problem
 from strokeopt.design.solve import solve_design
 
-KNOWN = Path(__file__).resolve().parents[1] / "problems" / "known_optima"
+KNOWN = Path(__file__).resolve().parents[2] / "problems" / "known_optima"
 
 # (file, peak-acceleration coefficient C_a = max|a| T^2/h, source)
 COEFFICIENTS = [

@@ -18,7 +18,7 @@ from strokeopt.drive.checks import drive_checks
 from strokeopt.drive.sizing import size_drive
 from strokeopt.errors import SolverError
 
-KNITTING = Path(__file__).resolve().parents[1] / "problems" / "knitting_stitch_density.toml"
+KNITTING = Path(__file__).resolve().parents[2] / "problems" / "knitting_stitch_density.toml"
 RELAXED = ["design.enforce_pull_out=false"]
 
 
@@ -77,7 +77,7 @@ def test_the_optimised_step_lowers_the_peak_cam_force_by_a_fifth(relaxed):
     problem, design = relaxed
     ramps = _peak_f6(problem, problem.stroke())
     optimal = _peak_f6(problem, design.stroke)
-    assert ramps == pytest.approx(21.7, rel=0.02)  # the ramps' F6 of tests/test_knitting.py
+    assert ramps == pytest.approx(21.7, rel=0.02)  # the ramps' F6 of tests/cli/test_knitting.py
     assert optimal <= 0.80 * ramps, (optimal, ramps)
 
 
@@ -105,7 +105,7 @@ def test_min_time_step_verified_in_the_elastic_chain(fastest):
     f6 = _peak_f6(fastest.problem, fastest.stroke, fastest.spm)
     assert math.isfinite(f6) and rows["peak force of link c6"]["value"] == pytest.approx(f6, rel=1e-9)
     assert rows["peak force of link c6"]["ok"] is None  # reported, not judged: the design has no limit on it
-    assert f6 < 21.7  # below the 6 ms linear ramps' (tests/test_knitting.py): a longer, smoother step
+    assert f6 < 21.7  # below the 6 ms linear ramps' (tests/cli/test_knitting.py): a longer, smoother step
 
 
 @pytest.mark.slow  # two solves through the command line (the failing 6 ms step, the relaxed one with --out)

@@ -11,7 +11,7 @@ import pytest
 from strokeopt import load_problem
 from strokeopt.cli.main import main
 
-PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+PROBLEMS = Path(__file__).resolve().parents[2] / "problems"
 REFERENCE = PROBLEMS / "deco2000_needle_bar.toml"
 
 

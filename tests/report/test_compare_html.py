@@ -11,7 +11,7 @@ import pytest
 from strokeopt.cli.main import main
 from strokeopt.report.design_report import SECTIONS
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 REFERENCE = ROOT / "problems" / "deco2000_needle_bar.toml"
 
 

@@ -202,5 +202,5 @@ def test_the_servo_path_imports_neither_python_control_nor_scipy(tmp_path):
             "    code = e.code\nprint(code, *sorted(m for m in ('control', 'scipy', 'matplotlib') if m in sys.modules),"
             " file=sys.stderr)")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          cwd=str(Path(__file__).resolve().parents[1]))
+                          cwd=str(Path(__file__).resolve().parents[2]))
     assert done.stderr.strip().splitlines()[-1] == "0", done.stderr[-500:]

@@ -19,7 +19,7 @@ from strokeopt.cli.main import main
 from strokeopt.errors import ProblemError
 from strokeopt.studies.runner import StudyRunner, chunks, run_study, study_runner
 
-MIN_JERK = Path(__file__).resolve().parents[1] / "problems" / "known_optima" / "min_jerk.toml"
+MIN_JERK = Path(__file__).resolve().parents[2] / "problems" / "known_optima" / "min_jerk.toml"
 SWEEP = ["--spm", "30:39:3"]  # four rates, a tenth of a second each
 
 

@@ -21,7 +21,7 @@ from strokeopt.drive.load import Load, Member, load_torque
 from strokeopt.drive.sizing import size_drive
 from strokeopt.report.motion import kinematics_summary
 
-KNITTING = Path(__file__).resolve().parents[1] / "problems" / "knitting_stitch_density.toml"
+KNITTING = Path(__file__).resolve().parents[2] / "problems" / "knitting_stitch_density.toml"
 
 
 @pytest.fixture(scope="module")
@@ -308,7 +308,7 @@ def test_bench_registers_the_elastic_step():
 
 
 def test_commands_without_the_screw_lever_or_stepper_say_so(capsys):
-    # `solve` designs through the screw and lever (tests/test_knitting_design.py); the servo accuracy has no stepper
+    # `solve` designs through the screw and lever (tests/design/test_knitting_design.py); the servo accuracy has no stepper
     err = _error(capsys, ["accuracy", str(KNITTING)])
     assert "drive.motor" in err and "stepper" in err
 

@@ -15,7 +15,7 @@ import pytest
 from strokeopt.cli.main import main
 from strokeopt.report.design_report import SECTIONS
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 REFERENCE = ROOT / "problems" / "deco2000_needle_bar.toml"
 CHROMIUM = Path("/usr/bin/chromium")
 VOID = {"meta", "br", "img", "input", "link", "hr", "col", "wbr", "source", "area", "base", "embed", "track"}

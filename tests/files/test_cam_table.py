@@ -15,7 +15,7 @@ from strokeopt.files.design_file import read_design
 from strokeopt.files.ranges import parse_cam_resolution
 from strokeopt.errors import ProblemError
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 REFERENCE = ROOT / "problems" / "deco2000_needle_bar.toml"
 
 

@@ -246,7 +246,7 @@ def test_verbose_only_where_something_is_printed(capsys, command, has_verbose):
 ])
 def test_a_failure_with_json_still_prints_a_json_status(argv, code, status, capsys):
     # a script reading --json gets a report on every exit, not an empty stdout
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     argv = [str(root / a) if a.startswith("problems/") else a for a in argv]
     assert main([*argv, "--json", "--plot", "none"]) == code
     out, err = capsys.readouterr()

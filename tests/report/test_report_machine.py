@@ -15,7 +15,7 @@ import pytest
 
 matplotlib.use("Agg")
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 CONTACT_DESIGN = ROOT / "problems" / "deco2000_contact_design.toml"
 KNITTING = ROOT / "problems" / "knitting_stitch_density.toml"
 A4_WIDTH_IN = 186 / 25.4  # A4 less the report's 12 mm margins: what a figure prints at (or less)

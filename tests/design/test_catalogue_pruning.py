@@ -13,14 +13,14 @@ from strokeopt.cli.main import main
 from strokeopt.design.search.bounds import least_peak_acceleration, torque_lower_bound
 from strokeopt.design.solve import _request
 
-PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+PROBLEMS = Path(__file__).resolve().parents[2] / "problems"
 REFERENCE = PROBLEMS / "deco2000_needle_bar.toml"
 
 
 def test_least_peak_acceleration_is_the_known_optimum():
     # docs/architecture.md known optima: 4 h/T^2 without a jerk bound; with the modified sine's jerk bound
     # (C_j = 28.0 for chi = 0.095) the jerk-bounded optimum C_a = 4.445 (problems/known_optima/
-    # jerk_bounded_peak_accel.toml, tests/test_known_optima.py)
+    # jerk_bounded_peak_accel.toml, tests/design/test_known_optima.py)
     assert least_peak_acceleration(1.0, 1.0, None) == pytest.approx(4.0)
     problem = load_problem(PROBLEMS / "known_optima" / "jerk_bounded_peak_accel.toml")
     (mv, _) = _request(problem, None, None, None, None, False).moves

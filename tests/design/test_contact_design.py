@@ -82,7 +82,7 @@ def test_stock_spring_highest_rate_keeping_the_follower_on_the_shell():
     # 600 spm (jerk_max_from_law = 600 in the shipped file), confirmed by the full simulation (lag < 0.05 mm)
     from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1] / "problems" / "deco2000_contact_design.toml"
+    path = Path(__file__).resolve().parents[2] / "problems" / "deco2000_contact_design.toml"
     problem = load_problem(path, ["design.free.k2.stiffness_N_m=[900,900]"])
     design = solve_design(problem, objective="min_time")
     assert 450 <= design.spm <= 520
@@ -100,7 +100,7 @@ def test_min_time_without_a_jerk_bound_continues_past_the_iteration_limit():
     # issue's rigid-cluster estimate of 450-500 spm (before: Maximum_Iterations_Exceeded, exit 1)
     from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1] / "problems" / "deco2000_contact_design.toml"
+    path = Path(__file__).resolve().parents[2] / "problems" / "deco2000_contact_design.toml"
     problem = load_problem(path, ["design.free.k2.stiffness_N_m=[900,900]", "design.jerk_max_from_law=false"])
     design = solve_design(problem, objective="min_time")
     assert 450 <= design.spm <= 500 and design.status == "optimal"
@@ -157,7 +157,7 @@ def test_impact_limit_whose_pin_move_failed_keeps_the_solution_before_it():
     # grid and the full simulation confirm it
     from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1] / "problems" / "deco2000_contact_design.toml"
+    path = Path(__file__).resolve().parents[2] / "problems" / "deco2000_contact_design.toml"
     vmax = 1.6 + (2.9 - 1.6) / 7
     problem = load_problem(path, [f"design.contact.impact_velocity_max_m_s={vmax!r}"])
     design = solve_design(problem)
@@ -396,7 +396,7 @@ def test_impact_study_needs_a_contact_section(reference_path, capsys):
 def test_the_shipped_contact_design_file_is_the_reference_plus_its_contact_sections(reference):
     from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1] / "problems" / "deco2000_contact_design.toml"
+    path = Path(__file__).resolve().parents[2] / "problems" / "deco2000_contact_design.toml"
     p = load_problem(path)
     assert p.spm == 600 and p.design.contact.keep_closed == ("c21",) and p.design.free == (("k2", 900.0, 3000.0),)
     assert p.design.motor_choice == p.design.pulley == "fixed" and p.pulley_teeth == 28

@@ -18,7 +18,7 @@ from strokeopt.files.design_file import read_design
 from strokeopt.drive.checks import drive_checks
 from strokeopt.files.design_file import write_design
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 KNOWN = ROOT / "problems" / "known_optima"
 REFERENCE = ROOT / "problems" / "deco2000_needle_bar.toml"
 FIXED = ['design.motor_choice="fixed"', 'design.pulley="fixed"']

@@ -13,7 +13,7 @@ import strokeopt as so
 from strokeopt.cli.main import main
 from strokeopt.io.plain import to_json
 
-PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+PROBLEMS = Path(__file__).resolve().parents[2] / "problems"
 
 CASES = [
     # (file, --set texts, --objective, expected status): the knitting drive with the pull-out curve reported,

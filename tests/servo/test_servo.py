@@ -239,7 +239,7 @@ def test_servo_term_is_given_to_problems_with_a_servo_section(reference):
     from strokeopt.design.solve import solve_design
     from strokeopt.servo.kernel import ServoErrorTerm
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     assert reference.servo is not None and reference.error_terms == (ServoErrorTerm(),)
     plain = load_problem(root / "problems" / "known_optima" / "min_jerk.toml")
     assert plain.servo is None and plain.error_terms == ()

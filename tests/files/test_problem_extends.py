@@ -11,7 +11,7 @@ import pytest
 from strokeopt import ProblemError, load_problem
 from strokeopt.cli.main import main
 
-PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+PROBLEMS = Path(__file__).resolve().parents[2] / "problems"
 
 
 def test_contact_design_file_holds_only_what_differs():

@@ -106,7 +106,7 @@ def test_the_json_report_says_whether_the_peaks_converged(reference_path, capsys
     assert data["peak_forces_converged"] is False and "k3" in data["unconverged_peaks"]
 
 
-HARD = [  # tests/test_simulate.py's hard cases, and the reference at 600 spm
+HARD = [  # tests/contact/test_simulate.py's hard cases, and the reference at 600 spm
     ("release 600 spm", "release", 600, []),
     ("1200 spm, whole bar", "handover", 1200, []),
     ("1e9 N/m on the 0.2 g needle, zero gap c45 at the start", "handover", 600, []),

@@ -14,7 +14,7 @@ from strokeopt.cli.main import main
 from strokeopt.design.solve import solve_design
 from strokeopt.errors import SolverError
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 KNOWN = ROOT / "problems" / "known_optima"
 
 
