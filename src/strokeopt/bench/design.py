@@ -193,4 +193,4 @@ def _with_options(problem, options: dict):
     from ..design.transcription.settings import DesignSettings
 
     settings = problem.design or DesignSettings()
-    return replace(settings, solver_options={**settings.solver_options, **options})
+    return replace(settings, solver_options={**settings.solver_options, **(options or {})})
