@@ -65,15 +65,16 @@ def fine_cycle(problem, spm: float, moves: list[Move], sols: list[MoveSolution],
     return tuple(np.concatenate(x) for x in (ts, ss, vs, as_))
 
 
-def drive_checks_fine(drive: DriveSetup, motor, teeth: int | None, radius: float, problem, spm, moves, sols,
-                       per_interval: int, belt_teeth: int | None = None) -> list:
-    """The drive package's checks of the solution, on a fine grid over the whole cycle. A continuous radius
-    has its belt rated as ``belt_teeth`` teeth (None: the fewest of the range); the problem's own
+def drive_checks_fine(drive: DriveSetup, motor, choice, radius: float, rated, sols, per_interval: int) -> list:
+    """The drive package's checks of the solution (``rated``: the request at the rate it runs at), on a fine
+    grid over the whole cycle, on ``motor`` and ``choice``'s pulley (``teeth``, or the continuous ``radius``,
+    its belt rated as ``choice.belt_teeth`` teeth -- None: the fewest of the range); the problem's own
     transmission (a screw and lever) has no pulley and no belt."""
     from ...drive.checks import drive_checks
 
+    teeth, belt_teeth = choice.teeth, choice.belt_teeth
     switches = switch_positions(drive)
-    t, s, v, a = fine_cycle(problem, spm, moves, sols, per_interval, switches)
+    t, s, v, a = fine_cycle(rated.problem, rated.spm, rated.moves, sols, per_interval, switches)
     if drive.own_transmission is not None:
         return drive_checks(motor, drive.own_transmission, drive.load, t, s, v, a, limits=drive.limits)
     if teeth is not None:

@@ -25,27 +25,12 @@ def choose_parts(req: SolveRequest, progress=None):
     tooth-count optima, so a motor whose continuous optimum is no better than the best
     design found so far is not solved for tooth counts.
     """
-    problem, spm, settings, drive, options = req.problem, req.spm, req.settings, req.drive, req.options
+    problem, spm, settings, drive = req.problem, req.spm, req.settings, req.drive
     objective, warm, radius0 = req.objective, req.warm, req.radius0
     if not (needs_terms(objective) or req.enforce_accuracy):
         req = replace(req, error_terms=())  # the handover accuracy is checked at the chosen design (solve.py)
     notes = []
-    if settings.motor_choice == "bonmin":
-        cands = tuple(drive.motors())
-        bonmin_opts = {k: v for k, v in options.items() if k not in ("ipopt.max_iter",)}
-        bonmin_opts["plugin"] = "bonmin"
-        try:
-            first = solve_one(replace(req, choice=DriveChoice(
-                None, None if settings.pulley != "fixed" else problem.pulley_teeth,
-                drive.radius_bounds() if settings.pulley != "fixed" else None, cands), options=bonmin_opts))
-        except SolverError as exc:
-            raise SolverError(f"no motor of the catalogue meets the limits at {spm:g} spm (Bonmin): {exc.reason}") from None
-        motors = [first.motor]
-        notes.append(f"motor chosen by Bonmin among {len(cands)} candidates (a heuristic for this non-convex problem)")
-    elif settings.motor_choice == "enumerate":
-        motors = drive.motors()
-    else:
-        motors = [drive.fixed_motor()]
+    motors = _candidates(req, notes)
     failures = []
     candidates = len(motors)
     if settings.prune_catalogue and len(motors) > 1:  # motors a rigid bound rules out: no NLP for them
@@ -103,6 +88,27 @@ def choose_parts(req: SolveRequest, progress=None):
     best.solve_time = total_time
     return best, teeth, notes
 
+
+
+def _candidates(req: SolveRequest, notes: list) -> list:
+    """The motors a search tries: Bonmin's choice (a heuristic, said in ``notes``), every motor of the catalogue
+    (``enumerate``), or the file's (``fixed``)."""
+    problem, spm, settings, drive, options = req.problem, req.spm, req.settings, req.drive, req.options
+    if settings.motor_choice == "bonmin":
+        cands = tuple(drive.motors())
+        bonmin_opts = {k: v for k, v in options.items() if k not in ("ipopt.max_iter",)}
+        bonmin_opts["plugin"] = "bonmin"
+        try:
+            first = solve_one(replace(req, choice=DriveChoice(
+                None, None if settings.pulley != "fixed" else problem.pulley_teeth,
+                drive.radius_bounds() if settings.pulley != "fixed" else None, cands), options=bonmin_opts))
+        except SolverError as exc:
+            raise SolverError(f"no motor of the catalogue meets the limits at {spm:g} spm (Bonmin): {exc.reason}") from None
+        notes.append(f"motor chosen by Bonmin among {len(cands)} candidates (a heuristic for this non-convex problem)")
+        return [first.motor]
+    if settings.motor_choice == "enumerate":
+        return drive.motors()
+    return [drive.fixed_motor()]
 
 def nearest_teeth(req: SolveRequest, motor, cont: Outcome):
     """Re-solve with the tooth counts either side of the continuous optimum; keep the better."""

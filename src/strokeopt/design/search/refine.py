@@ -243,8 +243,7 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
             if choice.candidates:
                 pick = nlp.value(dm.pick, x).ravel()
                 motor = choice.candidates[int(np.argmax(pick))]
-            checks = drive_checks_fine(drive, motor, choice.teeth, radius, req.problem, rated.spm, rated.moves,
-                                       sols, settings.check_points, choice.belt_teeth)
+            checks = drive_checks_fine(drive, motor, choice, radius, rated, sols, settings.check_points)
             over = [max(0.0, -c.margin) for c in checks if c.name in enforced_checks(settings, drive.stepper) and math.isfinite(c.margin)]
             if req.objective == "min_peak_torque":  # the epigraph held at the nodes; the fine grid reads the peak
                 nlp_peak = nlp.graph.cost.transform(objective_value(nlp, sol, x), nlp.request)
