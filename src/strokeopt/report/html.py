@@ -32,6 +32,7 @@ p.sub { color: #555; margin-top: 0; }
 table { border-collapse: collapse; margin: 0.5em 0 1em; font-size: 9pt; }
 th, td { border: 1px solid #bbb; padding: 0.2em 0.5em; text-align: right; vertical-align: top; }
 th { background: #eef0f5; } td.text, th.text { text-align: left; }
+td.text { overflow-wrap: anywhere; }  /* a long path (a problem file) wraps instead of leaving the page */
 td.better { background: #d9f2d9; font-weight: bold; }
 .ok { color: #176117; font-weight: bold; } .fail { color: #a61b1b; font-weight: bold; }
 table.compare th.text { min-width: 13em; } .keyfacts td { font-size: 10pt; } .keyfacts th { white-space: nowrap; } .keyfacts td.text { max-width: 34em; } figure { margin: 0.5em 0 1em; } figure svg { max-width: 100%; height: auto; }
