@@ -100,7 +100,7 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
                     notes=notes + _settings_notes(settings, free, nlp, drive), drive=resolved, settings=settings,
                     accuracy_enforced=bool(nlp.request.enforce_accuracy and terms), free_parameters=free)
     if handover_check is not None and any(c["name"].startswith(HANDOVER_CHECK) for c in checks):
-        design = replace(design, checks=_verified_handover(design, *handover_check(design), settings.check_tolerance))
+        design = replace(design, checks=verified_handover(checks, *handover_check(design), settings.check_tolerance))
     return _judge(design, best, drive, terms)
 
 
@@ -254,15 +254,18 @@ def _check_fixed_accuracy(problem, settings: DesignSettings, terms: tuple) -> No
 HANDOVER_CHECK = "handover accuracy"
 
 
-def _verified_handover(design: Design, value: float, what: str, tol: float) -> list[dict]:
-    """The check rows with the handover accuracy terms replaced by one row: ``value`` [m] of a full
-    simulation (``what`` names it), the sum of the design's terms beside it as ``design_term``."""
-    terms = [c for c in design.checks if c["name"].startswith(HANDOVER_CHECK)]
+def verified_handover(checks: list[dict], value: float, what: str, tol: float) -> list[dict]:
+    """The check rows with the handover accuracy rows replaced by one row: ``value`` [m] of a full simulation
+    (``what`` names it), judged by the one pass rule within ``tol``, the design's own term beside it as
+    ``design_term`` (kept when the rows already hold a full simulation's). The solve and
+    :func:`strokeopt.studies.verified.verify_design` both make the row here."""
+    terms = [c for c in checks if c["name"].startswith(HANDOVER_CHECK)]
     limit = float(terms[0]["limit"])
+    term = next((c["design_term"] for c in terms if "design_term" in c), sum(float(c["value"]) for c in terms))
     row = {"name": f"{HANDOVER_CHECK} ({what})", "value": value * 1e3, "limit": limit, "unit": "mm",
            "margin": 1.0 - value * 1e3 / limit if limit > 0 else -math.inf,
-           "ok": within_limit(value * 1e3, limit, tol), "design_term": sum(float(c["value"]) for c in terms)}
-    return [c for c in design.checks if c not in terms] + [row]
+           "ok": within_limit(value * 1e3, limit, tol), "design_term": term}
+    return [c for c in checks if c not in terms] + [row]
 
 
 def _report_checks(best: Outcome) -> tuple[list[dict], list[str]]:

@@ -20,8 +20,7 @@ from typing import Any
 from ..contact.verify import LIMIT_FIELDS, design_verification, verify
 from ..design.compare import compare_with_laws
 from ..design.result import design_summary
-from ..drive.checks import within_limit
-from ..design.solve import solve_design
+from ..design.solve import solve_design, verified_handover
 
 
 @dataclass(frozen=True)
@@ -141,18 +140,11 @@ def verify_design(design, *, accuracy=None, compare: bool = False, scenes=None, 
 
 
 def _with_handover(design, error: float):
-    """``design`` with its handover check row holding ``error`` [m] of a full simulation made now (the pass
-    rule of the solve: within the limit and its check tolerance), the design's own term kept beside it."""
-    rows = [c for c in design.checks if c["name"].startswith("handover accuracy")]
-    if not rows or design.settings is None:
+    """``design`` with its handover check row holding ``error`` [m] of a full simulation made now."""
+    if design.settings is None or not any(c["name"].startswith("handover accuracy") for c in design.checks):
         return design
-    row = dict(rows[-1])
-    limit = float(row["limit"])
-    row.update(name="handover accuracy (full servo simulation)", value=error * 1e3,
-               margin=1.0 - error * 1e3 / limit if limit > 0 else float("-inf"),
-               ok=within_limit(error * 1e3, limit, design.settings.check_tolerance))
-    row.setdefault("design_term", sum(float(c["value"]) for c in rows))
-    return replace(design, checks=[c for c in design.checks if c not in rows] + [row])
+    rows = verified_handover(design.checks, error, "full servo simulation", design.settings.check_tolerance)
+    return replace(design, checks=rows)
 
 
 def _design_scene(design) -> str:
