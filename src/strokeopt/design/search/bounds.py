@@ -8,7 +8,9 @@ forces and gravity on the bar, so its peak torque is at least ``min over r of (J
 (``J`` the rotor's inertia and the smallest pulley's: a larger pulley's only adds). The minimum over the pulleys the search may
 take is found exactly (``r* = sqrt(J a / (m a - |F|))`` clipped to the range). A motor whose bound exceeds its
 torque limit cannot carry the design at this rate with any pulley: :func:`prune` drops it with that reason,
-and the answer of the search is the exhaustive one (a dropped motor would have failed its solve).
+and the answer of the search is the exhaustive one (a dropped motor would have failed its solve). Where the
+objective is the peak torque itself, the bound also orders the search (:func:`best_bound_first`): once a
+design is at least as good as the next motor's bound, no motor left can win (:func:`cannot_win`).
 
 The bound is not made where it would not be one: a stepper (its limit is a curve over the speed), the
 problem's own transmission (a screw and lever: no pulley to choose), members between motor and load, free
@@ -64,6 +66,35 @@ def least_peak_acceleration(h: float, T: float, jerk: float | None) -> float:
     if jerk is None or not math.isfinite(jerk) or jerk * T**3 < 32.0 * h:
         return 4.0 * h / T**2
     return jerk * T / 4.0 * (1.0 - math.sqrt(1.0 - 32.0 * h / (jerk * T**3)))
+
+
+def best_bound_first(req, motors: list) -> list[tuple[object, float | None]]:
+    """``motors`` with the bound each gives the objective, best first: where the objective is the peak torque
+    (min_peak_torque) its :func:`torque_lower_bound` bounds every design of the motor, so a search that has a
+    design at least as good as a motor's bound need not solve that motor (:func:`cannot_win`). For any other
+    objective the bound says nothing of the objective: the catalogue's order, bounds None."""
+    if req.objective != "min_peak_torque":
+        return [(m, None) for m in motors]
+    bounds = [(m, (torque_lower_bound(req, m) or (None,))[0]) for m in motors]
+    return sorted(bounds, key=lambda mb: -math.inf if mb[1] is None else mb[1])
+
+
+def cannot_win(bound: float | None, best: float | None, tol: float) -> bool:
+    """Whether a motor whose objective bound is ``bound`` cannot beat the best design found (``best``, same unit):
+    its bound exceeds it by more than the design's ``check_tolerance`` (the objective is read at the collocation
+    nodes, the bound holds for the continuous stroke)."""
+    return bound is not None and best is not None and bound > best * (1 + tol)
+
+
+#: A motor whose rigid torque bound is at least this share of its torque limit is checked for feasibility before
+#: it is solved (:func:`near_limit`): where it fails, IPOPT would spend its restoration phase proving it.
+NEAR_LIMIT_SHARE = 0.85
+
+
+def near_limit(req, motor) -> bool:
+    """Whether ``motor``'s torque bound reaches :data:`NEAR_LIMIT_SHARE` of its limit (False: no bound made)."""
+    found = torque_lower_bound(req, motor)
+    return found is not None and found[0] >= NEAR_LIMIT_SHARE * peak_limit(motor, req.drive, req.settings.torque_reserve)
 
 
 def prune(req, motors: list) -> tuple[list, list]:

@@ -21,6 +21,29 @@ from ...errors import LimitError, SolverError
 
 def diagnose(req: SolveRequest, status: str) -> SolverError:
     """Why the solve of ``req`` failed: relax every limit group of its NLP, minimise the total excess, name the worst."""
+    error, _ = _relaxed(req, status)
+    if error is None:
+        where = f" for motor {req.choice.motor.name}" if req.choice is not None and req.choice.motor is not None else ""
+        hint = (f"raise the iteration limit ({req.options.get('ipopt.max_iter')}: [design.solver] "
+                f"\"ipopt.max_iter\" = 1000), " if status == "Maximum_Iterations_Exceeded" else "")
+        return SolverError(f"IPOPT did not converge at {req.spm:g} spm{where} ({status}) although the limits can be "
+                           f"met: {hint}try more mesh intervals, or --verbose to see the solver log")
+    return error
+
+
+def feasible_start(req: SolveRequest) -> list:
+    """A start for ``req`` that meets every limit: the relaxed NLP's solution when its excess is zero; else the
+    diagnosis is raised (a :class:`LimitError`), with no solve of ``req`` itself. For a candidate near its limits
+    this is cheaper than letting IPOPT prove the infeasibility (its restoration phase)."""
+    error, sols = _relaxed(req, "not solved: its limits were checked first")
+    if error is not None:
+        raise error
+    return sols
+
+
+def _relaxed(req: SolveRequest, status: str) -> tuple[SolverError | None, list | None]:
+    """``(error, None)`` naming the worst exceeded limit of ``req`` relaxed (or why the relaxed problem failed),
+    or ``(None, solution)`` when no limit is exceeded."""
     spm, choice, options = req.spm, req.choice, req.options
     where = f" for motor {choice.motor.name}" if choice is not None and choice.motor is not None else ""
     try:
@@ -28,13 +51,13 @@ def diagnose(req: SolveRequest, status: str) -> SolverError:
         opts = {k: v for k, v in options.items() if k != "plugin"}
         sol, stats, _ = solve_nlp(nlp, opts)
     except (RuntimeError, ValueError) as exc:  # pragma: no cover - a relaxed problem is always feasible
-        return SolverError(f"the design problem at {spm:g} spm{where} could not be solved (IPOPT: {status}; {exc})")
+        return SolverError(f"the design problem at {spm:g} spm{where} could not be solved (IPOPT: {status}; {exc})"), None
     if str(stats.get("return_status")) not in STATUS_OK:
         short = jerk_shortfall(req)  # a jerk bound far below any stroke's (its relaxation too large to solve)
         if short is not None:
-            return SolverError(short)
+            return SolverError(short), None
         return SolverError(f"the design problem at {spm:g} spm{where} could not be solved (IPOPT: {status}); "
-                           f"even with every limit relaxed: check the timing and the rest conditions")
+                           f"even with every limit relaxed: check the timing and the rest conditions"), None
     x = np.asarray(sol["x"]).ravel()
     violated = []  # (relative excess, limit group, slack), worst first
     for lim, slack in nlp.built.limits:
@@ -43,10 +66,7 @@ def diagnose(req: SolveRequest, status: str) -> SolverError:
             need = lim.need(sig)
             violated.append((need / lim.limit - 1 if lim.limit else math.inf, lim, need))
     if not violated:
-        hint = (f"raise the iteration limit ({options.get('ipopt.max_iter')}: [design.solver] "
-                f"\"ipopt.max_iter\" = 1000), " if status == "Maximum_Iterations_Exceeded" else "")
-        return SolverError(f"IPOPT did not converge at {spm:g} spm{where} ({status}) although the limits can be met: "
-                           f"{hint}try more mesh intervals, or --verbose to see the solver log")
+        return None, nlp.unpack(x)
     violated.sort(key=lambda v: -v[0])
     excess, lim, need = violated[0]
     subject = f"move {lim.move} too short" if lim.move is not None else "the design cannot meet the limits"
@@ -61,7 +81,7 @@ def diagnose(req: SolveRequest, status: str) -> SolverError:
             where_ = f" (move {other.move})" if other.move is not None else ""
             lines.append(f"  also{where_}: {need_text(other, other_need, other.what)}")
     # the relative excess of the worst limit ranks the motors of a catalogue search
-    return LimitError("\n".join(lines), excess, need_text(lim, need, lim.short))
+    return LimitError("\n".join(lines), excess, need_text(lim, need, lim.short)), None
 
 
 def need_text(lim: LimitGroup, need: float, name: str) -> str:

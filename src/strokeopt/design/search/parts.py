@@ -11,7 +11,8 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from .bounds import prune
+from .bounds import best_bound_first, cannot_win, near_limit, prune
+from .diagnose import feasible_start
 from .refine import Outcome, solve_one
 from ..transcription.objectives import needs_terms
 from ..transcription.request import DriveChoice, SolveRequest
@@ -21,13 +22,14 @@ from ...errors import LimitError, ProblemError, SolverError
 def choose_parts(req: SolveRequest, progress=None):
     """Motor (fixed, enumerated, or Bonmin) and pulley (fixed, or continuous radius then nearest tooth counts).
 
-    Enumeration prunes: the continuous-radius optimum of a motor is a lower bound of its
-    tooth-count optima, so a motor whose continuous optimum is no better than the best
-    design found so far is not solved for tooth counts.
+    Enumeration prunes twice. Before any NLP, a motor whose rigid torque bound exceeds its limit is dropped
+    (:func:`.bounds.prune`). Then the motors are tried best bound first where the bound bounds the objective
+    (:func:`.bounds.best_bound_first`), and the search ends when the best design found is at least as good as
+    every bound left; a motor's continuous-radius optimum is a lower bound of its tooth-count optima, so a
+    motor whose continuous optimum is no better than the best design found is not solved for tooth counts.
     """
-    problem, spm, settings, drive = req.problem, req.spm, req.settings, req.drive
-    objective, warm, radius0 = req.objective, req.warm, req.radius0
-    if not (needs_terms(objective) or req.enforce_accuracy):
+    problem, spm, settings = req.problem, req.spm, req.settings
+    if not (needs_terms(req.objective) or req.enforce_accuracy):
         req = replace(req, error_terms=())  # the handover accuracy is checked at the chosen design (solve.py)
     notes = []
     motors = _candidates(req, notes)
@@ -39,55 +41,70 @@ def choose_parts(req: SolveRequest, progress=None):
             notes.append(f"{len(failures)} of {candidates} motors ruled out before solving (their "
                          "least peak torque with any pulley exceeds their limit): "
                          + ", ".join(m.name for m, _ in failures))
-    # phase 1: every motor with its own best pulley radius (continuous), or the fixed pulley
-    first_pass = []
-    for motor in (progress(motors) if progress is not None and len(motors) > 1 else motors):
+    ordered = best_bound_first(req, motors) if settings.prune_catalogue else [(m, None) for m in motors]
+    results, unsolved, total_time = _search(req, ordered, failures, progress)
+    if unsolved:
+        notes.append(f"{len(unsolved)} motors not solved: their least peak torque with any pulley is above the "
+                     f"best design's {min(r[0].value for r in results):.4g} N m: " + ", ".join(unsolved))
+    if not results:
+        raise _no_motor(failures, spm)
+    best, teeth = min(results, key=lambda r: r[0].value)
+    if candidates > 1:
+        notes.append(f"motor chosen among {candidates} by enumeration ({len(failures)} infeasible): "
+                     f"lowest {req.objective}")
+    best.solve_time = total_time
+    return best, teeth, notes
+
+
+def _search(req: SolveRequest, ordered: list, failures: list, progress):
+    """Every motor of ``ordered`` ((motor, objective bound)) with its best pulley, in that order, each phase-1
+    solve warm-started from the previous motor's: ``(results, names not solved, solve time)``; ``results`` are
+    ``(Outcome, teeth)``, a failed motor is appended to ``failures``."""
+    problem, settings, drive = req.problem, req.settings, req.drive
+    warm, radius0 = req.warm, req.radius0
+    results, unsolved, total_time = [], [], 0.0
+    steps = progress(ordered) if progress is not None and len(ordered) > 1 else ordered
+    for motor, bound in steps:
+        best = min((r[0].value for r in results), default=None)
+        if cannot_win(bound, best, settings.check_tolerance):
+            unsolved.append(motor.name)
+            continue
         try:
             if settings.pulley == "fixed":
-                out = solve_one(replace(req, choice=DriveChoice(motor, problem.pulley_teeth), warm=warm,
-                                        radius0=None))
+                one = replace(req, choice=DriveChoice(motor, problem.pulley_teeth), warm=warm, radius0=None)
             else:
                 # with tooth counts to follow ("optimise"), the belt of the continuous radius is rated as the
                 # largest pulley's: a relaxation, so a motor is not dropped for a rating its pulleys beat
                 belt_teeth = drive.teeth_range[1] if settings.pulley == "optimise" else None
-                out = solve_one(replace(req, choice=DriveChoice(motor, None, drive.radius_bounds(),
-                                                                belt_teeth=belt_teeth), warm=warm, radius0=radius0))
+                one = replace(req, choice=DriveChoice(motor, None, drive.radius_bounds(), belt_teeth=belt_teeth),
+                              warm=warm, radius0=radius0)
+            if settings.prune_catalogue and near_limit(req, motor):  # a likely failure: its limits checked first
+                one = replace(one, warm=feasible_start(one))
+            out = solve_one(one)
+            if settings.pulley != "fixed":
                 radius0 = out.radius
             warm = out.sols
-            first_pass.append((out, motor))
+            total_time += out.solve_time
+            if settings.pulley != "optimise":
+                results.append((out, problem.pulley_teeth if settings.pulley == "fixed" else None))
+            elif best is None or out.value < best:  # else its tooth counts cannot win either
+                teeth_out, teeth = nearest_teeth(req, motor, out)
+                results.append((teeth_out, teeth))
+                total_time += teeth_out.solve_time
         except SolverError as exc:
             failures.append((motor, exc))
-    total_time = sum(o.solve_time for o, _ in first_pass)
-    # phase 2: tooth counts next to the continuous optimum, best lower bounds first
-    results = []
-    if settings.pulley in ("fixed", "continuous"):
-        results = [(o, problem.pulley_teeth if settings.pulley == "fixed" else None) for o, _ in first_pass]
-    else:
-        for cont, motor in sorted(first_pass, key=lambda r: r[0].value):
-            if results and cont.value >= min(r[0].value for r in results):
-                continue
-            try:
-                out, teeth = nearest_teeth(req, motor, cont)
-                results.append((out, teeth))
-                total_time += out.solve_time
-            except SolverError as exc:
-                failures.append((motor, exc))
-    if not results:
-        if len(failures) == 1:
-            raise failures[0][1]
-        # the motor that comes closest first; one line per motor after it
-        failures.sort(key=lambda f: f[1].excess if isinstance(f[1], LimitError) else math.inf)
-        m0, e0 = failures[0]
-        lines = [f"no motor of the catalogue can drive this design at {spm:g} spm; closest {m0.name}: {_short(e0)}"]
-        lines += [f"  {m.name}: {_short(e)}" for m, e in failures]
-        raise SolverError("\n".join(lines))
-    best, teeth = min(results, key=lambda r: r[0].value)
-    if candidates > 1:
-        notes.append(f"motor chosen among {candidates} by enumeration ({len(failures)} infeasible): "
-                     f"lowest {objective}")
-    best.solve_time = total_time
-    return best, teeth, notes
+    return results, unsolved, total_time
 
+
+def _no_motor(failures: list, spm) -> SolverError:
+    """The error of a search that found no design: the one motor's, or the closest first, one line a motor."""
+    if len(failures) == 1:
+        return failures[0][1]
+    failures.sort(key=lambda f: f[1].excess if isinstance(f[1], LimitError) else math.inf)
+    m0, e0 = failures[0]
+    lines = [f"no motor of the catalogue can drive this design at {spm:g} spm; closest {m0.name}: {_short(e0)}"]
+    lines += [f"  {m.name}: {_short(e)}" for m, e in failures]
+    return SolverError("\n".join(lines))
 
 
 def _candidates(req: SolveRequest, notes: list) -> list:
