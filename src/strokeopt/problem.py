@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 
 from .contact.model import parse_model
 from .contact.scene import parse_scenes
+from .contact.travel import check_travel
 from .design.transcription.contact_setup import check_contact
 from .design.transcription.free import check_free
 from .design.transcription.settings import parse_design
@@ -127,6 +128,7 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
     if model is not None and model.transmission is not None and timing.intervals[0].start_position != 0:
         raise ProblemError(file, "timing.start_position_mm", "a model on the transmission's members starts at the "
                                                              "transmission's zero: start_position_mm must be 0")
+    check_travel(model, timing, _model_reference(model, timing), file, unit_key(timing.unit))  # fits its stops
     if drive is not None:
         stages = transmission.stage_names()
         for k, member in enumerate(drive.load.members):

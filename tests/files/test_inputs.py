@@ -224,7 +224,8 @@ def test_a_damaged_design_file_is_refused(capsys, tmp_path, reference_path, desi
     ["kinematics", "--spm", "4000"],
     # the knitting machine of the sources (B): 3 g to 90 g, c = 1e7 N/m, clearances 1e-5 m
     ["simulate", "--set", "model.bodies.cage.mass_g=3", "--set", "model.bodies.control.mass_g=90",
-     "--set", "model.springs.k3.stiffness_N_m=1e7", "--set", "model.contacts.c13.gap_mm=0.01"],
+     "--set", "model.springs.k3.stiffness_N_m=1e7", "--set", "model.contacts.c13.gap_mm=0.01",
+     "--set", "model.contacts.c32.gap_mm=9.0"],  # gap P 0.01 mm and gap N 9 mm: the chain to the pad fits 32 mm
     ["size", "--motor", "055U2B30", "--set", "drive.moving_mass_kg=0.003", "--set", "model.springs.k2.stiffness_N_m=1e7"],
     ["accuracy", "--set", "machine.spm=50"],
 ])
