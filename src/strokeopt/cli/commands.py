@@ -299,9 +299,20 @@ def cmd_simulate(args) -> int:
         return 0
     result = simulate_scene(problem, scene, problem.spm, stroke=args.design_stroke, options=options)
     from ..contact.chain import chain_results
+    from ..contact.plausible import implausible_text, scene_implausible
 
-    chain = chain_results(problem, result, args.design_stroke or problem.stroke())  # a model on a transmission
-    return _report_scene(args, problem, scene, result, {"chain": chain} if chain else None)
+    stroke = args.design_stroke or problem.stroke()
+    chain = chain_results(problem, result, stroke)  # a model on a transmission
+    # a peak beyond what the scene's bodies and springs can load an element with is the model taken where it
+    # does not hold (contact/plausible.py): reported with its limit, never "ok"
+    implausible = scene_implausible(problem, result, stroke)
+    extra = {**({"chain": chain} if chain else {}), **({"implausible_forces": implausible} if implausible else {})}
+    _report_scene(args, problem, scene, result, extra or None, status="implausible forces" if implausible else "ok")
+    if implausible:
+        print(f"strokeopt: implausible forces in scene {scene!r}: {implausible_text(implausible)} (more than the "
+              "scene's bodies and springs can load any element with: contact/plausible.py)", file=sys.stderr)
+        return 1
+    return 0
 
 
 def cmd_verify(args) -> int:

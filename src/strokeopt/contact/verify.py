@@ -25,7 +25,7 @@ def _row(criterion: str, value, limit, unit: str, ok) -> dict:
 
 
 def verification(result: SceneResult, lag_max: float | None = None, impact_velocity_max: float | None = None,
-                 handover: dict | None = None, reported: tuple = ()) -> dict:
+                 handover: dict | None = None, reported: tuple = (), implausible: list | tuple = ()) -> dict:
     """The verdict of a simulated cycle against the design's criteria, one row each (value, limit, pass/fail):
 
     * premature release: gap N closed (or the needle released) before the impact -- always judged;
@@ -33,7 +33,9 @@ def verification(result: SceneResult, lag_max: float | None = None, impact_veloc
     * impact velocity against ``impact_velocity_max`` [m/s] (None: reported, not judged), within
       :data:`IMPACT_TOLERANCE`;
     * handover accuracy: ``handover``, a check row of the design (``value``, ``limit`` in mm, ``ok``), if given;
-    * ``reported``: more rows (criterion, value, unit), reported and not judged (an elastic chain's link forces).
+    * ``reported``: more rows (criterion, value, unit), reported and not judged (an elastic chain's link forces);
+    * ``implausible``: peak forces beyond what the model can carry (plausible.py's rows): one failed row
+      "plausible forces" naming them, so that a force of the model taken where it does not hold is never "ok".
 
     Returns ``{"scene", "status": "ok" | "verification failed", "criteria": [...], "failed": [names], "verdict"}``.
     """
@@ -53,10 +55,19 @@ def verification(result: SceneResult, lag_max: float | None = None, impact_veloc
     if handover is not None:
         rows.append(_row("handover accuracy", handover["value"], handover["limit"], "mm", bool(handover["ok"])))
     rows += [_row(criterion, value, None, unit, None) for criterion, value, unit in reported]
+    if implausible:
+        from .plausible import implausible_text
+
+        worst = implausible[0]
+        rows.append({**_row("plausible forces", worst["value"], worst["limit"], "N", False),
+                     "detail": implausible_text(implausible) + " (more than the scene's bodies and springs can load "
+                                                                "any element with: contact/plausible.py)",
+                     "forces": [dict(r) for r in implausible]})
     failed = [r for r in rows if r["ok"] is False]
     if failed:
         verdict = "verification failed: " + "; ".join(
-            r["criterion"] + (" (gap N closes before the impact)" if r["unit"] == "" else
+            r["criterion"] + (f": {r['detail']}" if "detail" in r else " (gap N closes before the impact)"
+                              if r["unit"] == "" else
                               f" {r['value']:.4g} {r['unit']} > limit {r['limit']:.4g} {r['unit']}") for r in failed)
     else:
         judged = [r["criterion"] for r in rows if r["ok"]]
@@ -97,8 +108,11 @@ def design_verification(design, scene: str | None = None, options: SimulationOpt
 
     links = chain_results(problem, result, design.stroke).get("links", [])
     reported = tuple((f"peak force of link {k['link']}", k["peak_abs"], k["unit"]) for k in links)
+    from .plausible import scene_implausible
+
     block = verification(result, None if contact is None else contact.lag_max,
-                         None if contact is None else contact.impact_velocity_max, handover, reported)
+                         None if contact is None else contact.impact_velocity_max, handover, reported,
+                         scene_implausible(problem, result, design.stroke))
     block["cpu_time_s"] = result.cpu_time_s
     return block
 

@@ -67,8 +67,13 @@ def scene_text(problem, scene: str, summary: dict) -> str:
             if s.get("belt_breaking_load_N") is not None else "")
     lines.append(f"peak force the drive supplies to the {sc.driven}: {s['peak_drive_force_N']:.1f} N (a stiff-contact "
                  f"spike of the contact model, microseconds long, not a sustained belt load{belt})")
-    lines.append("peak element forces [N] (located between the output points, no limit applies): "
-                 + ", ".join(f"{k} {v:.1f}" for k, v in s["peak_contact_forces_N"].items()))
+    lines.append("peak element forces [N] (located between the output points; no design limit, only the "
+                 "model's plausibility): " + ", ".join(f"{k} {v:.1f}" for k, v in s["peak_contact_forces_N"].items()))
+    if s.get("implausible_forces"):
+        from ..contact.plausible import implausible_text
+
+        lines.append("IMPLAUSIBLE forces, not of the mechanism but of the model taken where it does not hold: "
+                     + implausible_text(s["implausible_forces"]))
     errors = {**(s.get("peak_contact_force_errors_pct") or {}), "drive": s.get("peak_drive_force_error_pct")}
     if any(v is not None for v in errors.values()):
         known = {k: v for k, v in errors.items() if v is not None}
