@@ -41,3 +41,13 @@ def test_a_missing_peer_is_named():
                     notes=["rockit not installed"], name="design_vs_rockit", description="d")
     text = format_results([r])
     assert "nanx" not in text and "not measured (the peer is missing" in text
+
+
+def test_a_ratio_goal_is_judged_like_a_time_goal():
+    # a goal relative to the peer measured beside (issue 21: 980 spm at most 2x the 500 spm solve)
+    def result(ratio):
+        return BenchResult([BenchRow("a", 1.0)], measured_s=1.0, ratio=ratio, ratio_label="980 / 500", ratio_max=2.0,
+                           name="r", description="d")
+    assert result(1.9).meets_target is True and result(2.1).meets_target is False
+    assert "980 / 500 at most 2x -> 2.10x: NOT met" in format_results([result(2.1)])
+    assert BenchResult([], measured_s=1.0, ratio=3.0, ratio_label="x").meets_target is None  # no goal, no verdict

@@ -194,3 +194,35 @@ def _with_options(problem, options: dict):
 
     settings = problem.design or DesignSettings()
     return replace(settings, solver_options={**settings.solver_options, **(options or {})})
+
+
+#: The catalogue design near the belt's limit may take at most this many times the one at 500 spm (issue 21).
+CATALOGUE_980_RATIO = 2.0
+CATALOGUE_REPEATS = 2
+
+
+@benchmark("design_catalogue_search", "strokeopt solve problems/deco2000_needle_bar.toml at 980 spm (the catalogue "
+                                      "search near the belt's limit) against the same at 500 spm, and at 980 spm "
+                                      "without pruning (every motor solved), each run as the command")
+def _bench_design_catalogue_search() -> BenchResult:
+    from .servo import run_command
+
+    path = str(reference_problem_path())
+    runs = {}
+    for _ in range(CATALOGUE_REPEATS):  # in turn, the least of each: a load that comes and goes hits both alike
+        for key, args in (("500", ["--spm", "500"]), ("980", ["--spm", "980"]),
+                          ("980 exhaustive", ["--spm", "980", "--set", "design.prune_catalogue=false"])):
+            seconds, out = run_command(["solve", path, *args, "--json", "--plot", "none"])
+            runs[key] = min(runs.get(key, (seconds, out)), (seconds, out), key=lambda r: r[0])
+    (s500, d500), (s980, d980), (sall, dall) = runs["500"], runs["980"], runs["980 exhaustive"]
+    same = (d980["motor"], d980["pulley_teeth"]) == (dall["motor"], dall["pulley_teeth"])
+    return BenchResult(
+        rows=[BenchRow("500 spm, pruned search", s500, f"{d500['motor']}, {d500['pulley_teeth']} teeth"),
+              BenchRow("980 spm, pruned search", s980, f"{d980['motor']}, {d980['pulley_teeth']} teeth"),
+              BenchRow("980 spm, every motor solved (prune_catalogue = false)", sall,
+                       f"{dall['motor']}, {dall['pulley_teeth']} teeth: {'the same' if same else 'DIFFERENT'}; "
+                       f"pruning {sall / s980:.1f}x faster")],
+        measured_s=s980, ratio=s980 / s500, ratio_label="980 spm / 500 spm", ratio_max=CATALOGUE_980_RATIO,
+        notes=[f"wall times of the commands, each in its own process (imports and verification included), the "
+               f"least of {CATALOGUE_REPEATS} runs in turn",
+               *(n for n in d980["notes"] if "motors" in n)])

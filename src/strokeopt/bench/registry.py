@@ -47,15 +47,20 @@ class BenchResult:
     name: str = ""
     description: str = ""
     target_s: float | None = None
+    #: a goal on the ratio itself (the ratio at most this), where the goal is relative to the peer measured beside
+    ratio_max: float | None = None
 
     @property
     def meets_target(self) -> bool | None:
-        return None if self.target_s is None else self.measured_s < self.target_s
+        goals = [self.measured_s < self.target_s] if self.target_s is not None else []
+        if self.ratio_max is not None:
+            goals.append(self.ratio <= self.ratio_max)
+        return all(goals) if goals else None
 
     def as_dict(self) -> dict:
         return {"name": self.name, "description": self.description, "target_s": self.target_s,
                 "measured_s": self.measured_s, "meets_target": self.meets_target, "ratio": self.ratio,
-                "ratio_label": self.ratio_label, "notes": self.notes,
+                "ratio_label": self.ratio_label, "ratio_max": self.ratio_max, "notes": self.notes,
                 "rows": [{"label": r.label, "seconds": r.seconds, "note": r.note} for r in self.rows]}
 
 
@@ -104,8 +109,11 @@ def format_results(results: list[BenchResult]) -> str:
         else:
             lines.append(f"  ratio {r.ratio_label}: {r.ratio:.1f}x")
         if r.target_s is not None:
-            verdict = "met" if r.meets_target else "NOT met"
+            verdict = "met" if r.measured_s < r.target_s else "NOT met"
             lines.append(f"  target: under {r.target_s:g} s -> measured {r.measured_s:.3f} s: {verdict}")
+        if r.ratio_max is not None:
+            verdict = "met" if r.ratio <= r.ratio_max else "NOT met"
+            lines.append(f"  target: {r.ratio_label} at most {r.ratio_max:g}x -> {r.ratio:.2f}x: {verdict}")
         lines += [f"  note: {n}" for n in r.notes]
         lines.append("")
     return "\n".join(lines).rstrip()
