@@ -52,23 +52,33 @@ def _one_line_error(capsys, argv, field: str, angle: bool):
     return err
 
 
-@pytest.mark.parametrize("override, field", [
+@pytest.mark.parametrize("override, joint, links", [
     # a crank too long for its coupler (the first four-bar turns Grashof -> non-Grashof): no closure beyond an angle
-    ("transmission.joints[2].x_mm=60", "transmission.links[2]"),
+    ("transmission.joints[2].x_mm=60", "joint A", "links coupler3, rocker4"),
     # the needle rocker's pivot moved: the needle dyad reaches a toggle (dead centre) inside the cycle
-    ("transmission.joints[7].x_mm=-20", "transmission.links[4]"),
+    ("transmission.joints[7].x_mm=-20", "joint O6", "links coupler5, needle_rocker6"),
 ])
-def test_geometry_that_cannot_turn_is_refused_naming_the_angle(capsys, override, field):
-    # issue 24 acceptance (bad geometry): one line naming the file, the field and the angle, exit 2
+def test_geometry_that_cannot_turn_is_refused_naming_the_angle(capsys, override, joint, links):
+    # issue 24 acceptance (bad geometry): one line naming the file, the field and the angle, exit 2; the field
+    # is the one the user set (and the joint it moves), the links and the angle where the chain fails follow
+    field = override.split("=")[0]
     err = _one_line_error(capsys, ["linkage", str(BLIND), "--set", override, "--plot", "none"], field, angle=True)
-    assert "dead centre" in err
+    assert f": {field}: {joint} as set by --set" in err and links in err and "dead centre" in err
+
+
+def test_a_set_joint_of_the_loom_is_named_not_a_link(capsys):
+    # the loom's crank pin C moved to 60 mm: the triad cannot close; the message names the field set and pin C
+    err = _one_line_error(capsys, ["linkage", str(LOOM), "--set", "transmission.joints[2].x_mm=60", "--plot", "none"],
+                          "transmission.joints[2].x_mm", angle=True)
+    assert "joint C as set by --set" in err and "rod_CE, rod_BF, coupler, sley" in err
+    assert "transmission.links" not in err
 
 
 def test_a_link_too_short_in_the_loom(capsys):
     # issue 24 acceptance (a link too short to close), on the triad of digest C
     # the sley shaft B0 moved 60 mm towards the coupler: the sley cannot reach D over the whole turn
     err = _one_line_error(capsys, ["linkage", str(LOOM), "--set", "transmission.joints[7].y_mm=-40", "--plot", "none"],
-                          "transmission.links[2]", angle=True)
+                          "transmission.joints[7].y_mm: joint B0 as set by --set", angle=True)
     assert "rod_CE, rod_BF, coupler, sley" in err
 
 

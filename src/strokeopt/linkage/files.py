@@ -9,6 +9,7 @@ Read with :func:`load_linkage_file`; the result is a :class:`LinkageProblem`.
 from __future__ import annotations
 
 import math
+import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -81,8 +82,33 @@ def load_linkage_file(path, overrides: list[str] | None = None, check_cycle: boo
     if check_cycle:
         from .kinematics import kinematics_of
 
-        kinematics_of(linkage).solve(problem.angles)
+        try:
+            kinematics_of(linkage).solve(problem.angles)
+        except ProblemError as exc:
+            raise _blame_the_set(exc, data, overridden) from None
     return problem
+
+
+GEOMETRY_KEYS = ("x_mm", "y_mm", "reference_angle_deg")
+
+
+def _blame_the_set(exc: ProblemError, data: dict, overridden: frozenset) -> ProblemError:
+    """A geometry refused by the kinematics after a --set of a joint's coordinate (or the reference angle):
+    the error names the field the user set and the joint it moves, then the links and the angle where the
+    chain fails; without such a --set, the error as the kinematics made it (the first link of the group)."""
+    moved = sorted(f for f in overridden if f.rsplit(".", 1)[-1] in GEOMETRY_KEYS)
+    if not moved:
+        return exc
+    names = []
+    for f in moved:
+        m = re.fullmatch(r"transmission\.joints\[(\d+)\]\.\w+", f)
+        joints = data.get("transmission", {}).get("joints", [])
+        if m and int(m.group(1)) <= len(joints) and isinstance(joints[int(m.group(1)) - 1], dict):
+            names.append(f"joint {joints[int(m.group(1)) - 1].get('name')}")
+        else:
+            names.append("the reference pose")
+    what = ", ".join(dict.fromkeys(names))
+    return ProblemError(exc.file, ", ".join(moved), f"{what} as set by --set: {exc.message}")
 
 
 def _read_linkage(tr: Fields, file: str, name: str, gravity: float):
