@@ -180,3 +180,28 @@ def test_hybrid_crank_speed():
     assert low["dwell_time_ms"] >= dwell0 * 1e3 - 1e-6 and low["peak_torque_N_m"] < 0.6 * peak0
     long = hybrid_crank_speed(lp, peak_torque_max_N_m=peak0).numbers()
     assert long["peak_torque_N_m"] <= peak0 * (1 + 1e-6) and long["dwell_time_ms"] > 2.5 * dwell0 * 1e3
+
+
+def test_the_servo_problem_names_its_shipped_catalogue(tmp_path, monkeypatch):
+    # the servo file names the loom servos by the shipped catalogue's name (not a path into src/): a copy of the
+    # file, read from another directory, finds them; a name that is neither a file nor a shipped catalogue is
+    # refused naming the shipped ones
+    import shutil
+    from pathlib import Path
+
+    from strokeopt.drive.catalogue import shipped_catalogue_file
+
+    copy = tmp_path / "elsewhere" / "loom_beatup_servo.toml"
+    copy.parent.mkdir()
+    shutil.copy(Path(__file__).resolve().parents[2] / "problems" / "loom_beatup_servo.toml", copy)
+    other = tmp_path / "cwd"
+    other.mkdir()
+    monkeypatch.chdir(other)
+    problem = load_problem(copy)
+    assert list(problem.drive.catalogue_files) == [str(shipped_catalogue_file("loom_servos.toml"))]
+    assert "AC-servo-140-20" in problem.drive.catalogue().motors
+    bad = copy.read_text().replace('catalogues = ["loom_servos.toml"]', 'catalogues = ["loom_servo.toml"]')
+    copy.write_text(bad)
+    with pytest.raises(ProblemError) as err:
+        load_problem(copy)
+    assert err.value.field == "drive.catalogues" and "loom_servos.toml" in err.value.message

@@ -40,6 +40,9 @@ from .transmission import PROFILE_PITCH, TEETH_RANGE, BeltPulley, pitch_diameter
 RPM = 2 * math.pi / 60  # rad/s per rpm
 KG_CM2 = 1e-4  # kg m^2 per kg cm^2
 BUILTIN_FILES = ("motors.toml", "gt3_pulleys.toml", "gt3_belts.toml", "steppers.toml")
+#: Catalogues shipped but read only when a problem names one in [drive] catalogues (by its file name): the
+#: loom sley's servo motors stay out of the needle-bar problems' catalogue search.
+SHIPPED_FILES = BUILTIN_FILES + ("loom_servos.toml",)
 BELT_CORDS = ("glass", "steel")
 
 
@@ -257,6 +260,25 @@ class Catalogue:
 def builtin_catalogue_files() -> list[Path]:
     base = resources.files("strokeopt") / "drive" / "data"
     return [Path(str(base / name)) for name in BUILTIN_FILES]
+
+
+def shipped_catalogue_file(name: str) -> Path | None:
+    """The shipped catalogue file ``name`` (package data in ``strokeopt/drive/data/``, read only when a problem
+    names it, as ``loom_servos.toml``), or None when strokeopt ships no such catalogue."""
+    if name not in SHIPPED_FILES:
+        return None
+    return Path(str(resources.files("strokeopt") / "drive" / "data" / name))
+
+
+def resolve_catalogue_file(name: str, base_dir: Path | None = None) -> Path | None:
+    """Where a catalogue a problem names in ``[drive] catalogues`` is: a path (absolute, or relative to the
+    problem file's directory ``base_dir``) when that file exists, else the shipped catalogue of that name
+    (:func:`shipped_catalogue_file`), so a problem file names a shipped catalogue by its name and works from any
+    directory; None when neither exists."""
+    path = Path(name) if Path(name).is_absolute() else (base_dir or Path(".")) / name
+    if path.is_file():
+        return path
+    return shipped_catalogue_file(name)
 
 
 def load_catalogue(extra_files=(), builtin: bool = True) -> Catalogue:

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import ProblemError
-from .catalogue import BELT_CORDS, load_catalogue
+from .catalogue import BELT_CORDS, SHIPPED_FILES, load_catalogue, resolve_catalogue_file
 from .checks import BeltSpec, DriveLimits
 from .load import G, Load, LoadForce, Member
 from .transmission import PROFILE_PITCH, TEETH_RANGE
@@ -95,12 +95,13 @@ def parse_drive(f, base_dir: Path | None = None, model=None, reference=None, rot
     files = f.raw("catalogues", [])
     if not isinstance(files, list) or not all(isinstance(x, str) for x in files):
         raise f.error("catalogues", "must be an array of file names")
-    base = base_dir or Path(".")
     resolved = []
-    for x in files:
-        p = Path(x) if Path(x).is_absolute() else base / x
-        if not p.is_file():
-            raise f.error("catalogues", f"catalogue file {x!r} not found (looked for {p})")
+    for x in files:  # a file beside the problem, else a shipped catalogue named by its file name
+        p = resolve_catalogue_file(x, base_dir)
+        if p is None:
+            looked = Path(x) if Path(x).is_absolute() else (base_dir or Path(".")) / x
+            raise f.error("catalogues", f"catalogue file {x!r} not found (looked for {looked}, and strokeopt ships "
+                                        f"no catalogue of that name: {', '.join(SHIPPED_FILES)})")
         resolved.append(str(p))
     forces = []
     for row in f.tables("load_forces", required=False):
