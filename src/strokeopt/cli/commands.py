@@ -26,7 +26,17 @@ def cmd_laws(args) -> int:
     return 0
 
 
+def _linkage_file(args) -> bool:
+    from ..linkage.files import is_linkage_file
+
+    return is_linkage_file(args.problem)
+
+
 def cmd_kinematics(args) -> int:
+    if _linkage_file(args):  # a crank-driven linkage: its outputs over the crank angle (cli/linkage_command.py)
+        from .linkage_command import cmd_linkage_kinematics
+
+        return cmd_linkage_kinematics(args)
     from ..report.motion import plot_kinematics
     from ..report.motion import kinematics_summary, kinematics_text
     from ..report.format import to_json
@@ -52,6 +62,10 @@ def cmd_kinematics(args) -> int:
 
 
 def cmd_size(args) -> int:
+    if _linkage_file(args):  # a motor and gearbox on a linkage's crank (cli/linkage_command.py)
+        from .linkage_command import cmd_linkage_size
+
+        return cmd_linkage_size(args)
     from ..drive.sizing import optimal_radius, size_drive
     from ..report.drive import plot_sizing, sizing_text, sizing_verdict
     from ..report.format import to_json

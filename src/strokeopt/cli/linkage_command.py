@@ -56,15 +56,10 @@ def cmd_linkage(args) -> int:
 
         print(linkage_text(summary))
     _figure(args, problem, summary, "linkage")
-    if summary["status"] != "ok":
-        bad = next(t for t in summary["transmission"] if not t["ok"])
-        print(f"strokeopt: the transmission index of {', '.join(bad['links'])} falls to {bad['min_index']:.3g} at "
-              f"{bad['at_deg']:g} deg, below the limit {bad['limit']:g}", file=sys.stderr)
-        return 1
-    return 0
+    return _transmission_exit(summary)
 
 
-def _figure(args, problem, summary, command: str, linkage=None) -> None:
+def _figure(args, problem, summary, command: str, linkage=None, tags=()) -> None:
     from ..linkage.kinematics import kinematics_of
     from ..report.linkage import plot_linkage
 
@@ -76,7 +71,7 @@ def _figure(args, problem, summary, command: str, linkage=None) -> None:
     if syn.get("output") == summary["outputs"][0]["name"] and "angles_deg" in syn:
         t0 = math.degrees(lk.crank.reference_angle)
         targets = ([(a - t0) % 360 for a in syn["angles_deg"]], syn["speeds_m_s"])
-    _write_figure(lambda p: plot_linkage(kin, cycle, summary, p, targets), _plot_path(args, command), args)
+    _write_figure(lambda p: plot_linkage(kin, cycle, summary, p, targets), _plot_path(args, command, *tags), args)
 
 
 def _synthesize(args) -> int:
@@ -112,3 +107,90 @@ def _synthesize(args) -> int:
               f"{rms_max:g} m/s", file=sys.stderr)
         return 1
     return 0
+
+
+#: Options of ``kinematics`` and ``size`` that have no meaning for a linkage: its motion is its geometry (no law),
+#: its drive a motor and gearbox on the crank (no pulley, no design file).
+NOT_FOR_A_LINKAGE = {"law": "--law", "chi": "--chi", "design": "--design", "pulley_teeth": "--pulley-teeth",
+                     "max_spm": "--max-spm", "continuous_radius": "--continuous-radius"}
+
+
+def _linkage_problem(args, command: str):
+    """The linkage problem of ``kinematics`` or ``size``: the options that do not apply refused naming them,
+    ``--spm`` as the crank's rpm (one crank turn per machine cycle)."""
+    from ..errors import ProblemError
+    from ..linkage.files import load_linkage_file
+
+    for attr, option in NOT_FOR_A_LINKAGE.items():
+        if getattr(args, attr, None) not in (None, False, []):
+            raise ProblemError(option, "", f"{args.problem} is a linkage problem file: its motion is its geometry "
+                                           f"and its drive a motor and gearbox on the crank; {option} does not apply "
+                                           f"to 'strokeopt {command}' of a linkage (omit it)")
+    if command == "kinematics" and getattr(args, "motor", None):
+        raise ProblemError("--motor", "", f"{args.problem} is a linkage problem file: 'strokeopt kinematics' of a "
+                                          "linkage has no motor ('strokeopt size' chooses one for the crank)")
+    overrides = list(args.overrides)
+    if getattr(args, "spm", None) is not None:
+        from .common import _spm_value
+
+        overrides.append(f"machine.rpm={_spm_value(args.spm)!r}")   # one crank turn per machine cycle
+    return load_linkage_file(args.problem, overrides)
+
+
+def cmd_linkage_kinematics(args) -> int:
+    """``strokeopt kinematics LINKAGE.toml``: every output over the crank angle at the file's rpm (position,
+    speed, acceleration, jerk), swing, near-dwells, rise/fall asymmetry, the least transmission index."""
+    from ..linkage.summary import summarize
+    from ..report.format import to_json
+    from ..report.linkage import linkage_text
+
+    problem = _linkage_problem(args, "kinematics")
+    summary = {**summarize(problem, with_dynamics=False), "command": "kinematics"}
+    if args.json:
+        _emit(to_json(summary))
+    else:
+        print(linkage_text(summary))
+    _figure(args, problem, summary, "kinematics", tags=(f"{problem.rpm:g}rpm",))
+    return _transmission_exit(summary)
+
+
+def cmd_linkage_size(args) -> int:
+    """``strokeopt size LINKAGE.toml``: the crank torque over the cycle (reduced inertia, gravity, process loads;
+    power balance checked by Newton-Euler) and a servo motor and gearbox on the crank."""
+    from ..linkage.summary import size_summary
+    from ..report.format import to_json
+    from ..report.linkage import linkage_size_text
+
+    problem = _linkage_problem(args, "size")
+    summary = size_summary(problem, args.motor or None, args.catalogue, args.explain)
+    if args.json:
+        _emit(to_json(summary))
+    else:
+        print(linkage_size_text(summary, explain=args.explain))
+    chosen = summary["sizing"]["chosen"]
+    tags = (f"{problem.rpm:g}rpm", chosen["motor"] if chosen else "none")
+    _write_figure(lambda p: _size_figure(problem, summary, p), _plot_path(args, "size", *tags), args)
+    if summary["status"] != "ok":
+        print(f"strokeopt: infeasible: no motor and gearbox of the catalogue carries the crank at {problem.rpm:g} rpm "
+              "(the candidates' 'binding' column names the limit)", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _size_figure(problem, summary: dict, path) -> None:
+    from ..linkage.dynamics import analyse_dynamics
+    from ..linkage.kinematics import kinematics_of
+    from ..report.linkage import plot_linkage_size
+
+    kin = kinematics_of(problem.linkage)
+    cycle = kin.solve(problem.angles)
+    plot_linkage_size(kin, cycle, analyse_dynamics(kin, cycle, problem.omega), summary, path)
+
+
+def _transmission_exit(summary: dict) -> int:
+    if summary["status"] == "ok":
+        return 0
+    bad = next(t for t in summary["transmission"] if not t["ok"])
+    print(f"strokeopt: the transmission index of {', '.join(bad['links'])} falls to {bad['min_index']:.3g} at "
+          f"{bad['at_deg']:g} deg, below the limit {bad['limit']:g}", file=sys.stderr)
+    return 1

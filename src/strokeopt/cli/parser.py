@@ -123,8 +123,14 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("kinematics", parents=[problem], help="peak speed, acceleration and jerk of each interval",
                        description="Kinematics of the problem's stroke: per interval the stroke, span, time, peak "
                                    "bar speed, acceleration and jerk, and peak pulley speed and acceleration; "
-                                   "a figure of position, velocity, acceleration and jerk over the cam angle.",
-                       epilog="Example: strokeopt kinematics problems/deco2000_needle_bar.toml --spm 600 --law poly5")
+                                   "a figure of position, velocity, acceleration and jerk over the cam angle. "
+                                   "A linkage problem file ([transmission] type = \"linkage\"): every output's "
+                                   "position, speed, acceleration and jerk over the crank angle at the file's rpm "
+                                   "(--spm: the crank's rpm), its swing, near-dwells, rise/fall asymmetry and the "
+                                   "least transmission index (exit 1 below the file's limit); the figure draws the "
+                                   "mechanism at six poses with the joint paths and the transmission index.",
+                       epilog="Examples: strokeopt kinematics problems/deco2000_needle_bar.toml --spm 600 --law poly5; "
+                              "strokeopt kinematics problems/loom_beatup_sixbar.toml --json")
     _stroke_options(p)
     _drive_options(p, "the design's optimal stroke replaces the problem's law")
     _plot_option(p, "kinematics_<spm>spm_<law>")
@@ -136,10 +142,16 @@ def build_parser() -> argparse.ArgumentParser:
                                    "drive's peak limit (overload = peak / rated), RMS torque against the rated "
                                    "torque, peak speed against the rated speed, load/rotor inertia ratio, belt width "
                                    "and breaking checks (thesis appendix 2). The load is the [drive] section of the "
-                                   "problem: moving mass, gravity, load forces.",
-                       epilog="Example: strokeopt size problems/deco2000_needle_bar.toml --spm 600 --max-spm "
-                              "--motor 055U2B30 --explain. Exit code 1 (status 'infeasible') when no pair passes "
-                              "every check; the verdict line names the binding limit.")
+                                   "problem: moving mass, gravity, load forces. A linkage problem file: the crank "
+                                   "torque at the file's constant rpm by the power balance (reduced inertia J and J', "
+                                   "gravity, process loads in their crank-angle windows) checked against Newton-Euler, "
+                                   "and a servo motor and gearbox on the crank without a flywheel: every gearbox "
+                                   "with every motor of the file's [drive] catalogues, the smallest motor that fits "
+                                   "chosen (as the servo sley's study chooses).",
+                       epilog="Examples: strokeopt size problems/deco2000_needle_bar.toml --spm 600 --max-spm "
+                              "--motor 055U2B30 --explain; strokeopt size problems/loom_beatup_sixbar.toml --explain. "
+                              "Exit code 1 (status 'infeasible') when no pair passes every check; the verdict line "
+                              "names the binding limit.")
     _stroke_options(p)
     _drive_options(p, "its optimal stroke replaces the problem's law", repeatable=True)
     p.add_argument("--catalogue", action="append", default=[], metavar="FILE",

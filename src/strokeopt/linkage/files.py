@@ -17,6 +17,7 @@ from pathlib import Path
 from ..errors import ProblemError
 from ..io.fields import Fields, apply_overrides
 from .model import Crank, Joint, Link, Linkage, Load, Output
+from .sizing import CrankDrive, read_crank_drive
 
 KGF_CM_S2 = 9.80665 * 0.01    # kg m^2 per kgf cm s^2 (1 kgf = 9.80665 N, 1 cm = 0.01 m)
 KINDS = ("angle", "arc", "x", "y")
@@ -35,11 +36,23 @@ class LinkageProblem:
     near_dwell_pct: float           # near dwell: output within this share of the swing of an extreme
     angles: int                     # samples per turn
     synthesis: dict = field(default_factory=dict)   # [synthesis] as read (synthesis.py checks it)
+    drive: CrankDrive = field(default_factory=CrankDrive)   # [drive]: what `size` puts on the crank
 
     @property
     def omega(self) -> float:
         """Crank speed [rad/s]."""
         return self.rpm * 2 * math.pi / 60
+
+
+def is_linkage_file(path) -> bool:
+    """Whether ``path`` is a linkage problem file (``[transmission] type = "linkage"``); False for any other
+    file or one that cannot be read (its own reader then says why)."""
+    try:
+        data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return False
+    tr = data.get("transmission")
+    return isinstance(tr, dict) and tr.get("type") == "linkage"
 
 
 def load_linkage_file(path, overrides: list[str] | None = None, check_cycle: bool = True) -> LinkageProblem:
@@ -73,8 +86,9 @@ def load_linkage_file(path, overrides: list[str] | None = None, check_cycle: boo
     tr.finish()
     synth = top.table("synthesis", required=False)
     synthesis = dict(synth.data) if synth is not None else {}   # checked below by targets.read_spec
+    drive = read_crank_drive(top.table("drive", required=False), Path(path).parent)
     top.finish()
-    problem = LinkageProblem(file, name, description, linkage, rpm, *limits, synthesis)
+    problem = LinkageProblem(file, name, description, linkage, rpm, *limits, synthesis, drive)
     if synth is not None:   # checked now (names, ranges, misspelt keys), used by --synthesize
         from .targets import read_spec
 

@@ -98,3 +98,35 @@ def summarize(problem, with_dynamics: bool | None = None) -> dict:
     if with_dynamics or (with_dynamics is None and has_mass):
         summary["dynamics"] = analyse_dynamics(kin, cycle, problem.omega).to_dict()
     return summary
+
+
+def dynamics_table(dyn, step_deg: float = TABLE_STEP_DEG) -> list[dict]:
+    """The crank torque's terms every ``step_deg`` of crank: reduced inertia J and J', the inertia term
+    J' omega^2 / 2, gravity V', the process loads, the power-balance torque and Newton-Euler's."""
+    th = dyn.theta
+    step = max(1, int(round(math.radians(step_deg) / (th[1] - th[0]))))
+    return [{"angle_deg": _deg(th[k]), "J_kg_m2": float(dyn.J[k]), "dJ_kg_m2_rad": float(dyn.dJ[k]),
+             "inertia_torque_N_m": float(0.5 * dyn.dJ[k] * dyn.omega ** 2),
+             "gravity_torque_N_m": float(dyn.gravity_torque[k]), "process_torque_N_m": float(dyn.load_torque[k]) + 0.0,
+             "torque_N_m": float(dyn.torque[k]), "torque_newton_euler_N_m": float(dyn.torque_ne[k])}
+            for k in range(0, len(th), step)]
+
+
+def size_summary(problem, motors: list[str] | None = None, extra_catalogues=(), explain: bool = False) -> dict:
+    """What ``strokeopt size`` reports for a linkage problem: the crank torque over the cycle at the file's rpm
+    (its terms, the process loads' windows, Newton-Euler's check) and a servo motor and gearbox on the crank
+    (sizing.size_crank); ``status`` 'infeasible' when no pair carries the cycle."""
+    from .sizing import size_crank
+
+    kin = kinematics_of(problem.linkage)
+    cycle = kin.solve(problem.angles)
+    dyn = analyse_dynamics(kin, cycle, problem.omega)
+    sizing = size_crank(dyn, problem.drive, motors, extra_catalogues)
+    loads = [{"name": ld.name, "link": ld.link, "joint": ld.joint, "from_deg": round(math.degrees(ld.start), 6),
+              "to_deg": round(math.degrees(ld.end), 6), "force_start_N": ld.force_start, "force_end_N": ld.force_end,
+              "direction_deg": round(math.degrees(ld.direction), 6)} for ld in problem.linkage.loads]
+    return {"status": "ok" if sizing.chosen is not None else "infeasible", "problem": problem.name,
+            "file": problem.file, "rpm": problem.rpm, "omega_rad_s": problem.omega,
+            "gravity_m_s2": problem.linkage.gravity, "process_loads": loads,
+            "transmission": transmission_summary(kin, cycle, problem.min_transmission_index), "dynamics": dyn.to_dict(),
+            "terms": dynamics_table(dyn), "sizing": sizing.to_dict(explain)}

@@ -112,12 +112,7 @@ def plot_linkage(kin, cycle, summary: dict, path, targets=None, poses: int = 6) 
         ax[1, 0].plot(*targets, "o", label="table")
         ax[1, 0].legend()
     ax[1, 0].set(xlabel="crank angle from the reference [deg]", ylabel=f"speed [{o['speed_unit']}]")
-    for g, t in enumerate(summary["transmission"]):
-        ax[1, 1].plot(deg, cycle.index[:, g], label=f"{t['group']} {', '.join(t['links'])}")
-    if summary["transmission"]:
-        ax[1, 1].axhline(summary["transmission"][0]["limit"], color="r", ls="--", label="limit")
-    ax[1, 1].set(xlabel="crank angle from the reference [deg]", ylabel="transmission index", ylim=(0, 1.05))
-    ax[1, 1].legend(fontsize=7)
+    _draw_transmission(ax[1, 1], cycle, summary["transmission"])
     for a in ax.flat:
         a.grid(alpha=0.3)
     fig.suptitle(summary["problem"])
@@ -147,3 +142,80 @@ def _draw_mechanism(ax, kin, cycle, poses: int) -> None:
     for i, name in enumerate(names):
         ax.annotate(name, allpts[0, 2 * i:2 * i + 2], fontsize=8)
     ax.set(aspect="equal", xlabel="x [mm]", ylabel="y [mm]", title=f"{poses} poses, 360 deg / {poses} apart; paths")
+
+
+def _draw_transmission(ax, cycle, transmission: list[dict]) -> None:
+    """The transmission index of every group over the crank angle, with the file's limit."""
+    deg = np.degrees(cycle.theta - cycle.theta[0])
+    for g, t in enumerate(transmission):
+        ax.plot(deg, cycle.index[:, g], label=f"{t['group']} {', '.join(t['links'])}")
+    if transmission:
+        ax.axhline(transmission[0]["limit"], color="r", ls="--", label="limit")
+    ax.set(xlabel="crank angle from the reference [deg]", ylabel="transmission index", ylim=(0, 1.05))
+    ax.legend(fontsize=7)
+
+
+SIZE_COLUMNS = [("gearbox", "gearbox"), ("ratio", "i"), ("motor", "motor"), ("rated_torque_N_m", "rated N m"),
+                ("peak_torque_N_m", "peak N m"), ("rms_torque_N_m", "RMS N m"), ("motor_speed_rpm", "motor rpm"),
+                ("inertia_ratio", "inertia ratio"), ("feasible", "fits"), ("binding", "binding"), ("margin", "margin")]
+TERM_COLUMNS = [("angle_deg", "crank deg"), ("J_kg_m2", "J kg m^2"), ("dJ_kg_m2_rad", "J' kg m^2/rad"),
+                ("inertia_torque_N_m", "J'w^2/2 N m"), ("gravity_torque_N_m", "gravity N m"),
+                ("process_torque_N_m", "process N m"), ("torque_N_m", "crank N m"),
+                ("torque_newton_euler_N_m", "Newton-Euler N m")]
+
+
+def linkage_size_text(s: dict, explain: bool = False) -> str:
+    """The text of ``strokeopt size`` for a linkage (linkage.summary.size_summary)."""
+    d, z = s["dynamics"], s["sizing"]
+    lines = [f"{s['problem']}  ({s['file']})",
+             f"crank {s['rpm']:g} rpm = {s['omega_rad_s']:.4f} rad/s, constant; gravity {s['gravity_m_s2']:g} m/s^2 "
+             "along -y"]
+    for ld in s["process_loads"]:
+        lines.append(f"process load {ld['name']} on {ld['link']} at {ld['joint']}: {ld['force_start_N']:g} -> "
+                     f"{ld['force_end_N']:g} N over crank {ld['from_deg']:g} -> {ld['to_deg']:g} deg, "
+                     f"{ld['direction_deg']:g} deg from the link's line")
+    lines += [_dynamics_text(d), format_table(s["terms"][::max(1, len(s["terms"]) // 36)], TERM_COLUMNS), "",
+              f"{z['drive']}; motors from {', '.join(z['motors_from'])}, gearboxes from {z['gearboxes_from']}",
+              format_table(z["candidates"], SIZE_COLUMNS)]
+    c = z["chosen"]
+    if c is None:
+        lines.append("infeasible: no motor and gearbox carries the crank")
+    else:
+        lines.append(f"chosen: {c['motor']} with {c['gearbox']} (i = {c['ratio']:g}), the smallest motor that fits, "
+                     f"then the least RMS: peak {c['peak_torque_N_m']:.4g} N m, RMS {c['rms_torque_N_m']:.4g} N m at "
+                     f"{c['motor_speed_rpm']:.0f} rpm; binding {c['binding']} (margin {c['margin']:.3f})")
+        if explain:
+            lines.append(format_table(c["checks"], [("name", "check"), ("value", "value"), ("limit", "limit"),
+                                                    ("unit", "unit"), ("margin", "margin"), ("ok", "ok")]))
+    return "\n".join(lines)
+
+
+def plot_linkage_size(kin, cycle, dyn, summary: dict, path, poses: int = 6) -> None:
+    """The mechanism at ``poses`` input angles with the joint paths, the transmission index over the cycle, the
+    crank torque by term (``dyn``: linkage.dynamics.Dynamics; Newton-Euler's as dots) and the reduced inertia J
+    with J'."""
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(2, 2, figsize=(11, 8.5))
+    _draw_mechanism(ax[0, 0], kin, cycle, poses)
+    _draw_transmission(ax[0, 1], cycle, summary["transmission"])
+    deg = np.degrees(dyn.theta - dyn.theta[0])
+    for y, label in ((0.5 * dyn.dJ * dyn.omega ** 2, "inertia J'w^2/2"), (dyn.gravity_torque, "gravity"),
+                     (dyn.load_torque, "process loads"), (dyn.torque, "crank torque (power balance)")):
+        ax[1, 0].plot(deg, y, lw=2 if y is dyn.torque else 1, label=label)
+    ax[1, 0].plot(deg[::6], dyn.torque_ne[::6], "k.", ms=3, label="Newton-Euler")
+    ax[1, 0].set(xlabel="crank angle from the reference [deg]", ylabel="torque on the crank [N m]")
+    ax[1, 0].legend(fontsize=7)
+    ax[1, 1].plot(deg, dyn.J, label="J")
+    twin = ax[1, 1].twinx()
+    twin.plot(deg, dyn.dJ, color="tab:orange", label="J'")
+    ax[1, 1].set(xlabel="crank angle from the reference [deg]", ylabel="reduced inertia J [kg m^2] (blue)")
+    twin.set_ylabel("J' [kg m^2/rad] (orange)")
+    for a in ax.flat:
+        a.grid(alpha=0.3)
+    z = summary["sizing"]["chosen"]
+    fig.suptitle(f"{summary['problem']} at {summary['rpm']:g} rpm"
+                 + (f": {z['motor']}, {z['gearbox']} on the crank" if z else ": no motor and gearbox fits"))
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)

@@ -23,68 +23,20 @@ and :func:`plot_linkage_servo`.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
 from ..design.solve import solve_design
 from ..design.torque import design_torque
-from ..drive.catalogue import load_catalogue
+# the gearbox catalogue lives in drive/gearboxes.py; its names stay importable from here (notebook 07)
+from ..drive.gearboxes import (KG_CM2, GearboxEntry, choose_smallest, gearbox_catalogue_file,  # noqa: F401
+                               load_gearboxes, own_motors)
 from ..errors import ProblemError, SolverError
-from ..io.fields import Fields
 from ..linkage.dynamics import analyse_dynamics
 from ..linkage.kinematics import kinematics_of
 from ..linkage.summary import near_dwells
-
-KG_CM2 = 1e-4
-
-
-@dataclass(frozen=True)
-class GearboxEntry:
-    """A gearbox of the catalogue: ``ratio`` motor turns per output turn, the output torques it carries [N m]
-    (rated, the cycle's peak) and its inertia on the motor shaft [kg m^2]."""
-
-    name: str
-    ratio: float
-    rated_output_torque: float
-    peak_output_torque: float
-    inertia: float
-    model: str = ""
-    source: str = ""
-
-
-def gearbox_catalogue_file() -> Path:
-    return Path(str(resources.files("strokeopt") / "drive" / "data" / "gearboxes.toml"))
-
-
-def load_gearboxes(path: str | Path | None = None) -> list[GearboxEntry]:
-    """The ``[[gearbox]]`` entries of ``path`` (default: the shipped drive/data/gearboxes.toml), validated."""
-    path = Path(path) if path is not None else gearbox_catalogue_file()
-    file = str(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, tomllib.TOMLDecodeError) as exc:
-        raise ProblemError(file, "", f"cannot be read: {exc}") from None
-    top = Fields(data, file)
-    out = []
-    for row in top.tables("gearbox"):
-        # ratios 1 (a direct drive) to 1000 (as [transmission] ratio); torques to 1e5 N m; inertias as a rotor's
-        entry = GearboxEntry(row.string("name"), row.number("ratio", min=1.0, max=1000.0),
-                             row.number("rated_output_torque_N_m", positive=True, max=1e5),
-                             row.number("peak_output_torque_N_m", positive=True, max=1e5),
-                             row.number("inertia_kg_cm2", min=0.0, max=1e6) * KG_CM2,
-                             row.string("model", ""), row.string("source", ""))
-        row.finish()
-        if entry.peak_output_torque < entry.rated_output_torque:
-            raise row.error("peak_output_torque_N_m", "is below the rated output torque")
-        out.append(entry)
-    top.finish()
-    if len({g.name for g in out}) != len(out):
-        raise ProblemError(file, "gearbox", "two gearboxes have the same name")
-    return out
 
 
 @dataclass
@@ -217,8 +169,7 @@ def compare_linkage_servo(linkage_problem, servo_problem, gearboxes: list[Gearbo
     gearboxes = load_gearboxes() if gearboxes is None else gearboxes
     catalogue = servo_problem.drive.catalogue()
     if motors is None:  # the motors of the problem's own catalogue files, else every motor
-        own = load_catalogue(servo_problem.drive.catalogue_files, builtin=False).motors
-        motors = list(own) or list(catalogue.motors)
+        motors = own_motors(servo_problem.drive.catalogue_files, catalogue)
     static = _static_torque(servo_problem)
     candidates = []
     pairs = [(g, m) for g in gearboxes for m in motors]
@@ -249,7 +200,7 @@ def compare_linkage_servo(linkage_problem, servo_problem, gearboxes: list[Gearbo
             cand.reason = (f"gearbox peak output torque {g.peak_output_torque:g} N m < "
                            f"{cand.numbers['peak_output_torque_N_m']:.1f} N m")
     fits = [c for c in candidates if c.feasible]
-    chosen = min(fits, key=lambda c: (c.rated_torque, c.numbers["rms_torque_N_m"])) if fits else None
+    chosen = choose_smallest(fits, lambda c: c.rated_torque, lambda c: c.numbers["rms_torque_N_m"])
     result = LinkageServo(linkage_side(linkage_problem), candidates, chosen)
     if chosen is not None:
         t, terms = design_torque(chosen.design, samples=3601)
