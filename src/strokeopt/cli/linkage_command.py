@@ -121,12 +121,14 @@ def _linkage_problem(args, command: str):
     from ..errors import ProblemError
     from ..linkage.files import load_linkage_file
 
+    if getattr(args, "servo", None) and command != "report":
+        raise ProblemError("--servo", "", "--servo is for the report of a linkage problem file")
     for attr, option in NOT_FOR_A_LINKAGE.items():
         if getattr(args, attr, None) not in (None, False, []):
             raise ProblemError(option, "", f"{args.problem} is a linkage problem file: its motion is its geometry "
                                            f"and its drive a motor and gearbox on the crank; {option} does not apply "
                                            f"to 'strokeopt {command}' of a linkage (omit it)")
-    if command == "kinematics" and getattr(args, "motor", None):
+    if command == "kinematics" and getattr(args, "motor", None):  # size and report: the motors tried
         raise ProblemError("--motor", "", f"{args.problem} is a linkage problem file: 'strokeopt kinematics' of a "
                                           "linkage has no motor ('strokeopt size' chooses one for the crank)")
     overrides = list(args.overrides)
@@ -194,3 +196,52 @@ def _transmission_exit(summary: dict) -> int:
     print(f"strokeopt: the transmission index of {', '.join(bad['links'])} falls to {bad['min_index']:.3g} at "
           f"{bad['at_deg']:g} deg, below the limit {bad['limit']:g}", file=sys.stderr)
     return 1
+
+
+def cmd_linkage_report(args, out) -> int:
+    """``strokeopt report LINKAGE.toml --out FILE.html [--servo SERVO.toml]``: the linkage's structure,
+    kinematics, transmission quality, crank torque and drive (and the servo comparison) as one HTML page."""
+    import time
+    from datetime import datetime, timezone
+
+    from ..errors import ProblemError
+    from ..linkage.dynamics import analyse_dynamics
+    from ..linkage.kinematics import kinematics_of
+    from ..linkage.summary import size_summary, summarize
+    from ..report.design_report import versions
+    from ..report.format import to_json
+    from ..report.linkage_report import LinkageReportData, linkage_report
+
+    for attr, option in (("objective", "--objective"), ("scene", "--scene")):
+        if getattr(args, attr, None):
+            raise ProblemError(option, "", f"{args.problem} is a linkage problem file: {option} does not apply to "
+                                           "its report (omit it)")
+    t0 = time.perf_counter()
+    problem = _linkage_problem(args, "report")
+    servo = _servo_comparison(args, problem)   # the bad input of --servo before the page is drawn
+    kin = kinematics_of(problem.linkage)
+    cycle = kin.solve(problem.angles)
+    motors = [args.motor] if getattr(args, "motor", None) else None
+    data = LinkageReportData(summarize(problem, with_dynamics=False), size_summary(problem, motors), kin, cycle,
+                             analyse_dynamics(kin, cycle, problem.omega), servo, args.servo or "",
+                             list(args.overrides), versions(), datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC"))
+    text = linkage_report(data)
+    out.write_text(text, encoding="utf-8")
+    info = {"status": "ok", "report": str(out), "size_bytes": len(text.encode("utf-8")),
+            "build_time_s": time.perf_counter() - t0, "servo": args.servo}
+    if args.json:
+        _emit(to_json(info))
+    else:
+        print(f"written {out} ({info['size_bytes'] / 1024:.0f} KB, built in {info['build_time_s']:.2f} s"
+              + (f"; against the servo of {args.servo}" if args.servo else "") + ")")
+    return 0
+
+
+def _servo_comparison(args, problem):
+    """``--servo SERVO.toml``: the linkage against its output on a servo (studies/linkage_servo.py), or None."""
+    if not getattr(args, "servo", None):
+        return None
+    from ..files.problem_file import load_problem
+    from ..studies.linkage_servo import compare_linkage_servo
+
+    return compare_linkage_servo(problem, load_problem(args.servo))

@@ -328,11 +328,15 @@ def _report_parsers(sub, problem) -> None:
                                    "encoder); contact-model verification per scene; numerical accuracy; the inputs "
                                    "(the problem as resolved with every --set) and versions. Without --design the "
                                    "design is solved first, as 'strokeopt solve' does; 'solve --out DIR' writes "
-                                   "DIR/report.html too.",
+                                   "DIR/report.html too. A linkage problem file's report: structure, kinematics of "
+                                   "every output, transmission quality, crank torque and the motor and gearbox on "
+                                   "the crank ('strokeopt kinematics' and 'size' of it), and with --servo the "
+                                   "linkage against a servo.",
                        epilog="Examples: strokeopt report problems/deco2000_needle_bar.toml --out report.html; "
                               "strokeopt solve problems/deco2000_needle_bar.toml --spm 600 --out out && strokeopt "
                               "report problems/deco2000_needle_bar.toml --design out/design.json --out "
-                              "out/report.html --scene all")
+                              "out/report.html --scene all; strokeopt report problems/loom_beatup_sixbar.toml "
+                              "--servo problems/loom_beatup_servo.toml --out loom.html")
     p.add_argument("--out", dest="html", required=True, metavar="FILE.html", help="the report file to write")
     p.add_argument("--objective", help="objective of the solve (without --design; overrides design.objective)")
     _stroke_options(p, law=False)
@@ -340,6 +344,10 @@ def _report_parsers(sub, problem) -> None:
     p.add_argument("--scene", action="append", metavar="NAME",
                    help="contact scene to verify (repeatable; 'all': every scene; default: release, else the "
                         "first: the others can take seconds each)")
+    p.add_argument("--servo", metavar="SERVO.toml",
+                   help="with a linkage problem file: also set the linkage against its output driven directly by a "
+                        "servo through a gearbox, this problem file solved with every gearbox and motor of its "
+                        "catalogues (e.g. problems/loom_beatup_servo.toml; about 20 solves)")
     _integrator_arguments(p)
     p.set_defaults(run=cmd_report, plot=None, verbose=False)
 

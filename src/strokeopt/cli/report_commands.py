@@ -61,6 +61,16 @@ def cmd_report(args) -> int:
     from ..report.format import to_json
 
     out = _html_path(args.html)
+    from ..linkage.files import is_linkage_file
+
+    if is_linkage_file(args.problem):  # a crank-driven linkage: its own page (report/linkage_report.py)
+        from .linkage_command import cmd_linkage_report
+
+        return cmd_linkage_report(args, out)
+    if getattr(args, "servo", None):
+        raise ProblemError("--servo", "", f"{args.problem} is no linkage problem file: --servo sets a linkage "
+                                          "against a servo (e.g. problems/loom_beatup_sixbar.toml --servo "
+                                          "problems/loom_beatup_servo.toml)")
     if args.design is not None and args.objective is not None:  # it would be ignored: say so instead
         raise ProblemError("--objective", "", f"a design read from --design {args.design} was solved for its own "
                                               "objective; --objective is for a report that solves (omit one of them)")

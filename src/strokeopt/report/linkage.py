@@ -117,6 +117,8 @@ def plot_linkage(kin, cycle, summary: dict, path, targets=None, poses: int = 6) 
         a.grid(alpha=0.3)
     fig.suptitle(summary["problem"])
     fig.tight_layout()
+    if path is None:   # the caller's (the HTML report inlines it)
+        return fig
     fig.savefig(path)
     plt.close(fig)
 
@@ -217,5 +219,7 @@ def plot_linkage_size(kin, cycle, dyn, summary: dict, path, poses: int = 6) -> N
     fig.suptitle(f"{summary['problem']} at {summary['rpm']:g} rpm"
                  + (f": {z['motor']}, {z['gearbox']} on the crank" if z else ": no motor and gearbox fits"))
     fig.tight_layout()
+    if path is None:
+        return fig
     fig.savefig(path)
     plt.close(fig)
