@@ -47,9 +47,6 @@ def _cam_spec(args):
 
 def cmd_solve(args) -> int:
     from ..design.transcription.objectives import OBJECTIVES
-    from ..studies.sweeps import fastest_feasible, mesh_study, sweep_design
-    from ..report.design import design_text, plot_design, plot_design_sweep, plot_mesh_study
-    from ..report.format import drive_text, format_table, to_json
 
     sweep = None
     if args.spm is not None and ":" in args.spm and args.design is None:  # with --design: refused by _load
@@ -69,52 +66,78 @@ def cmd_solve(args) -> int:
     cam_spec = _cam_spec(args)
     progress = progress_bar(args, "solve", "solve")
     if args.study == "mesh":
-        rows = mesh_study(problem, objective=args.objective, progress=progress and (lambda it: progress(it, "mesh")))
-        if args.json:
-            _emit(to_json({"status": "ok", "problem": problem.name, "spm": problem.spm, "study": "mesh",
-                           "drive": drive_used(args, problem), "rows": rows}))
-        else:
-            print(f"{problem.name} at {problem.spm:g} spm: the same design on each mesh (file's motor and pulley); "
-                  f"error against the last (finest) mesh")
-            print(format_table(rows, [("intervals", "intervals"), ("degree", "degree"), ("variables", "variables"),
-                                      ("objective_value", "objective"), ("objective_error_pct", "error %"),
-                                      ("violation_between_nodes", "violation between nodes"),
-                                      ("time_s", "build + solve time s")]))
-        _write_figure(lambda p: plot_mesh_study(rows, p),
-                      _plot_path(args, "solve_mesh", spm_tag(problem.spm), _objective(args, problem)), args)
-        return 0
+        return _mesh_study(args, problem, progress)
     if args.study == "impact":
         return _impact_study(args, problem, progress)
     if args.impact_range is not None:
         raise ProblemError("--impact-range", "", "is for --study impact")
     if sweep is not None:
-        runner = _runner(args, len(sweep))
-        rows = sweep_design(problem, sweep, objective=args.objective, runner=runner,
-                            progress=progress and (lambda it: progress(it, "spm")))
-        best = fastest_feasible(rows)
-        at_end = best is not None and all(r["feasible"] for r in rows)  # the sweep found no limit
-        if args.json:
-            _emit(to_json({"status": "ok" if best is not None else "infeasible", "problem": problem.name,
-                           "objective": args.objective or (problem.design.objective if problem.design else None),
-                           "rows": rows, "fastest_feasible_spm": best, "fastest_feasible_is_sweep_end": at_end}))
-        else:
-            print(format_table(rows, [("spm", "spm"), ("feasible", "feasible"), ("objective_value", "objective"),
-                                      ("motor", "motor"), ("pulley_teeth", "z"), ("peak_torque_N_m", "peak N m"),
-                                      ("rms_torque_N_m", "RMS N m"), ("solve_time_s", "solve time s"),
-                                      ("reason", "why not")],
-                               title=f"{problem.name}: optimal design over the stitch rate ({_chained(runner)})"))
-            print("\nno feasible stitch rate in the sweep" if best is None else
-                  f"\nfastest feasible stitch rate: >= {best:g} spm (the end of the sweep; every rate was feasible)"
-                  if at_end else f"\nfastest feasible stitch rate: {best:g} spm")
-        _write_figure(lambda p: plot_design_sweep(rows, p, _objective(args, problem)),
-                      _plot_path(args, "solve_sweep", spm_tag(sweep), _objective(args, problem)), args)
-        if _report_failed_tasks(rows, "spm", "spm"):
-            return 1
-        if best is None:
-            print("strokeopt: infeasible: no stitch rate of the sweep meets every limit (column 'why not')",
-                  file=sys.stderr)
-            return 1
-        return 0
+        return _sweep(args, problem, sweep, progress)
+    return _solve_one(args, problem, cam_spec, progress)
+
+
+def _mesh_study(args, problem, progress) -> int:
+    """``solve --study mesh``: the same design on each mesh against the finest."""
+    from ..studies.sweeps import mesh_study
+    from ..report.design import plot_mesh_study
+    from ..report.format import format_table, to_json
+
+    rows = mesh_study(problem, objective=args.objective, progress=progress and (lambda it: progress(it, "mesh")))
+    if args.json:
+        _emit(to_json({"status": "ok", "problem": problem.name, "spm": problem.spm, "study": "mesh",
+                       "drive": drive_used(args, problem), "rows": rows}))
+    else:
+        print(f"{problem.name} at {problem.spm:g} spm: the same design on each mesh (file's motor and pulley); "
+              f"error against the last (finest) mesh")
+        print(format_table(rows, [("intervals", "intervals"), ("degree", "degree"), ("variables", "variables"),
+                                  ("objective_value", "objective"), ("objective_error_pct", "error %"),
+                                  ("violation_between_nodes", "violation between nodes"),
+                                  ("time_s", "build + solve time s")]))
+    _write_figure(lambda p: plot_mesh_study(rows, p),
+                  _plot_path(args, "solve_mesh", spm_tag(problem.spm), _objective(args, problem)), args)
+    return 0
+
+
+def _sweep(args, problem, sweep: list, progress) -> int:
+    """``solve --spm START:STOP:STEP``: the verified design at each rate, on the study runner."""
+    from ..studies.sweeps import fastest_feasible, sweep_design
+    from ..report.design import plot_design_sweep
+    from ..report.format import format_table, to_json
+
+    runner = _runner(args, len(sweep))
+    rows = sweep_design(problem, sweep, objective=args.objective, runner=runner,
+                        progress=progress and (lambda it: progress(it, "spm")))
+    best = fastest_feasible(rows)
+    at_end = best is not None and all(r["feasible"] for r in rows)  # the sweep found no limit
+    if args.json:
+        _emit(to_json({"status": "ok" if best is not None else "infeasible", "problem": problem.name,
+                       "objective": args.objective or (problem.design.objective if problem.design else None),
+                       "rows": rows, "fastest_feasible_spm": best, "fastest_feasible_is_sweep_end": at_end}))
+    else:
+        print(format_table(rows, [("spm", "spm"), ("feasible", "feasible"), ("objective_value", "objective"),
+                                  ("motor", "motor"), ("pulley_teeth", "z"), ("peak_torque_N_m", "peak N m"),
+                                  ("rms_torque_N_m", "RMS N m"), ("solve_time_s", "solve time s"),
+                                  ("reason", "why not")],
+                           title=f"{problem.name}: optimal design over the stitch rate ({_chained(runner)})"))
+        print("\nno feasible stitch rate in the sweep" if best is None else
+              f"\nfastest feasible stitch rate: >= {best:g} spm (the end of the sweep; every rate was feasible)"
+              if at_end else f"\nfastest feasible stitch rate: {best:g} spm")
+    _write_figure(lambda p: plot_design_sweep(rows, p, _objective(args, problem)),
+                  _plot_path(args, "solve_sweep", spm_tag(sweep), _objective(args, problem)), args)
+    if _report_failed_tasks(rows, "spm", "spm"):
+        return 1
+    if best is None:
+        print("strokeopt: infeasible: no stitch rate of the sweep meets every limit (column 'why not')",
+              file=sys.stderr)
+        return 1
+    return 0
+
+
+def _solve_one(args, problem, cam_spec, progress) -> int:
+    """One verified design: its text (or JSON), design.json and report.html with --out, its figure, the exit."""
+    from ..report.design import design_text, plot_design
+    from ..report.format import drive_text, to_json
+
     verified, chosen = solve_once(args, problem, progress)
     design, comparison = verified.design, verified.comparison
     summary = {**verified.summary(), "drive": chosen}
@@ -129,16 +152,7 @@ def cmd_solve(args) -> int:
         print(drive_text(chosen))
         print(f"verdict: {verified.verdict}")
     if args.out is not None:
-        from ..files.design_file import write_design
-
-        for path in write_design(design, args.out, spec=cam_spec, extra={
-                "comparison": comparison, "drive": chosen, "verdict": verified.verdict,
-                "not_judged": summary["not_judged"]}):
-            print(f"written {path}", file=sys.stderr if args.json else sys.stdout)
-        from ..report.design_report import gather, write_report
-
-        info = write_report(gather(verified, summary), Path(args.out) / "report.html")  # `strokeopt report`
-        print(f"written {info['report']}", file=sys.stderr if args.json else sys.stdout)
+        _write_outputs(args, verified, summary, chosen, cam_spec)
     # one figure: --plot FILE, else into --out DIR beside design.json, else strokeopt-out/
     fig_path = _plot_path(args, "solve", spm_tag(design.spm), design.objective)
     if fig_path is not None and args.plot is None and args.out is not None:
@@ -154,6 +168,20 @@ def cmd_solve(args) -> int:
         print(f"strokeopt: --strict: {verified.verdict}", file=sys.stderr)
         return 1
     return 0
+
+
+def _write_outputs(args, verified, summary: dict, chosen, cam_spec) -> None:
+    """``solve --out DIR``: design.json (and the cam table) and report.html, each path named as written."""
+    from ..files.design_file import write_design
+    from ..report.design_report import gather, write_report
+
+    stream = sys.stderr if args.json else sys.stdout
+    for path in write_design(verified.design, args.out, spec=cam_spec, extra={
+            "comparison": verified.comparison, "drive": chosen, "verdict": verified.verdict,
+            "not_judged": summary["not_judged"]}):
+        print(f"written {path}", file=stream)
+    info = write_report(gather(verified, summary), Path(args.out) / "report.html")  # `strokeopt report`
+    print(f"written {info['report']}", file=stream)
 
 
 def _impact_range(text: str | None) -> list[float]:
