@@ -205,3 +205,48 @@ def test_the_servo_problem_names_its_shipped_catalogue(tmp_path, monkeypatch):
     with pytest.raises(ProblemError) as err:
         load_problem(copy)
     assert err.value.field == "drive.catalogues" and "loom_servos.toml" in err.value.message
+
+
+def test_a_rotary_design_file_and_report_say_deg_and_rad(tmp_path, capsys):
+    # a rotary load's design.json, solve --json and report: positions in deg and speeds in rad/s under keys that
+    # say so (before: stroke_mm holding rad x 1e3); the file reads back to the same stroke, as does one written
+    # before (mm-named keys): io/load_units.py
+    import json
+    import re
+
+    from strokeopt.cli.main import main
+    from strokeopt.files.design_file import read_design
+    from strokeopt.io.load_units import from_load_units
+
+    _problem(tmp_path, "min_peak_accel")
+    out = tmp_path / "out"
+    # exit 1: the test motor's rotor of 1e-10 kg m^2 breaks the inertia ratio; the files are written all the same
+    assert main(["solve", str(tmp_path / "sley.toml"), "--out", str(out), "--json", "--plot", "none"]) == 1
+    summary = json.loads(capsys.readouterr().out)
+    text = (out / "design.json").read_text()
+    for data in (summary, json.loads(text)):
+        move = data["moves"][0]
+        assert move["stroke_deg"] == pytest.approx(19.5, abs=1e-9) and move["a_max_rad_s2"] == pytest.approx(80.6,
+                                                                                                               rel=0.01)
+        assert "v_max_rad_s" in move and "jerk_max_rad_s3" in move
+    assert not re.search(r'"(stroke|start_position|position)_mm"|"(v_max|velocity)_m_s"|_m_s[23]"', text)
+    data = json.loads(text)
+    assert data["intervals"][1]["position_deg"] == pytest.approx(19.5, abs=1e-9)
+    cols = data["cam_table"]["columns"]
+    assert cols[1:5] == ["position_deg", "velocity_rad_s", "acceleration_rad_s2", "jerk_rad_s3"]
+    assert max(row[1] for row in data["cam_table"]["rows"]) == pytest.approx(19.5, abs=1e-6)
+    assert "position_deg" in (out / "cam_table.csv").read_text()
+    _, stroke = read_design(out / "design.json")
+    old = tmp_path / "old.json"   # the same design as a file of before: mm-named keys holding rad x 1e3
+    old.write_text(json.dumps(from_load_units(data)))
+    assert '"stroke_mm": 340.3' in old.read_text()
+    _, stroke_old = read_design(old)
+    t = np.linspace(0, stroke.period, 97)
+    assert np.allclose(stroke.evaluate(t).s, stroke_old.evaluate(t).s, atol=1e-12)
+    assert stroke.evaluate(t).s.max() == pytest.approx(math.radians(19.5), rel=1e-9)
+    # the report: the tables say deg and rad/s, the tagged numbers are the JSON's
+    html = (out / "report.html").read_text()
+    assert "stroke deg" in html and "a_max rad/s2" in html and "start position deg" in html
+    assert "stroke mm" not in html and "a_max m/s2" not in html and "v_max m/s" not in html
+    tag = re.search(r'data-key="moves\[0\]\.stroke_deg" data-value="([^"]+)"', html)
+    assert tag and float(tag.group(1)) == summary["moves"][0]["stroke_deg"]

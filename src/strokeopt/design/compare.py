@@ -16,6 +16,7 @@ from .transcription.request import design_moves
 from .result import Design
 from .torque import design_drive as _design_drive
 from .transcription.settings import DesignSettings
+from ..io.load_units import to_load_units
 from ..motion.laws import make_law
 from ..motion.stroke import StrokeFunction
 
@@ -106,7 +107,8 @@ def compare_with_laws(design: Design, laws=None) -> list[dict]:
         pct = 100.0 * (val / base - 1.0) if base and val is not None and math.isfinite(val) else None
         r["vs_optimal_pct"] = 0.0 if pct is not None and abs(pct) < 1e-6 else pct  # equal up to round-off: 0
     # a law that breaks the problem's constraints does not compete with the optimum: listed last
-    return [opt] + [r for r in rows[1:] if r["feasible"]] + [r for r in rows[1:] if not r["feasible"]]
+    ordered = [opt] + [r for r in rows[1:] if r["feasible"]] + [r for r in rows[1:] if not r["feasible"]]
+    return to_load_units(ordered, problem.timing.rotary)   # a rotary load's a_max_rad_s2, jerk_max_rad_s3
 
 
 def _contact_violations(problem, settings: DesignSettings, stroke: StrokeFunction, samples: int = 20_001) -> list[str]:

@@ -15,6 +15,7 @@ import numpy as np
 
 from .transcription.collocation import Mesh, MoveSolution, fine_grid, move_piece
 from ..drive.selection import resolve_drive
+from ..io.load_units import from_load_units, to_load_units
 from ..motion.stroke import StrokeFunction, dwell_piece
 
 
@@ -137,7 +138,7 @@ class Design:
 
     def summary(self) -> dict:
         """The JSON report of ``strokeopt solve`` (without the cam table)."""
-        return {
+        return to_load_units({
             "status": self.status,
             "problem": self.problem.name,
             "problem_file": str(Path(self.problem.file).resolve()),
@@ -160,7 +161,7 @@ class Design:
             "notes": self.notes,
             **({"verification": self.verification} if self.verification is not None else {}),
             **({"free_parameters": self.free_parameters} if self.free_parameters else {}),
-        }
+        }, _rotary(self.problem))
 
     def check_value(self, name: str) -> float | None:
         """The value of the check ``name`` (``peak_torque``, ``rms_torque``...), None when not checked."""
@@ -196,13 +197,18 @@ def design_summary(design: Design) -> dict:
         out["verification"] = design.verification
     if design.free_parameters:
         out["free_parameters"] = design.free_parameters
-    return out
+    return to_load_units(out, _rotary(design.problem))   # a rotary load's keys in deg, rad/s (io/load_units.py)
+
+
+def _rotary(problem) -> bool:
+    return bool(getattr(getattr(problem, "timing", None), "rotary", False))
 
 
 def design_from_data(problem, data: dict, stroke: StrokeFunction) -> Design:
     """The :class:`Design` a ``design.json`` holds (``data`` and ``stroke`` as
     :func:`strokeopt.files.design_file.read_design` returns them), on ``problem`` (the problem it was
     solved for, at its stitch rate): its numbers are the file's, its motor the catalogue's."""
+    data = from_load_units(data)  # a rotary load's keys (stroke_deg, v_max_rad_s, ...) as the linear ones
     mesh = Mesh(int(data["mesh"]["intervals"]), int(data["mesh"]["degree"]))
     moves = []
     for m in data["moves"]:

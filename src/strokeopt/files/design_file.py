@@ -47,6 +47,7 @@ from ..errors import ProblemError, SolverError
 from ..problem import SPM_RANGE
 from .problem_file import load_problem
 from ..io.fields import Fields
+from ..io.load_units import from_load_units, load_key, to_load_units
 from ..io.plain import to_json
 from ..motion.stroke import StrokeFunction, dwell_piece
 
@@ -81,9 +82,15 @@ CAM_COLUMNS = [("position_mm", "mm", "bar position (problem frame, + up)"),
                                           "transmission (0 at 0 mm)"),
                ("motor_speed_rpm", "rpm", "motor speed"),
                ("motor_torque_N_m", "N m", "motor torque on the design's motor and pulley (rigid load model)")]
+#: A rotary load's (a sley on its shaft) in place of the first four (io/load_units.py).
+CAM_COLUMNS_ROTARY = [("position_deg", "deg", "load angle (problem frame, + up)"),
+                      ("velocity_rad_s", "rad/s", "load angular velocity"),
+                      ("acceleration_rad_s2", "rad/s^2", "load angular acceleration"),
+                      ("jerk_rad_s3", "rad/s^3", "load angular jerk")]
 _CAM_FORMATS = {"cam_angle_deg": "%.4f", "master_counts": "%.0f", "position_mm": "%.6f", "velocity_m_s": "%.6f",
                 "acceleration_m_s2": "%.4f", "jerk_m_s3": "%.2f", "motor_angle_deg": "%.5f",
-                "motor_speed_rpm": "%.3f", "motor_torque_N_m": "%.5f"}
+                "motor_speed_rpm": "%.3f", "motor_torque_N_m": "%.5f", "position_deg": "%.6f",
+                "velocity_rad_s": "%.6f", "acceleration_rad_s2": "%.4f", "jerk_rad_s3": "%.2f"}
 
 
 def design_transmission(design):
@@ -122,6 +129,9 @@ def cam_table(design, resolution_deg: float = 0.1, spec: CamTableSpec | None = N
     for name, col in out.items():
         if not np.all(np.isfinite(col)):
             raise SolverError(f"cam table column {name} is not finite: refusing to write it")
+    if design.problem.timing.rotary:  # a rotary load: its angle in deg, rad/s, rad/s^2, rad/s^3
+        out = {load_key(name, True): col for name, col in out.items()}
+        out["position_deg"] = np.degrees(k.s)
     return out
 
 
@@ -145,7 +155,10 @@ def cam_table_header(design, spec: CamTableSpec) -> list[str]:
 
 #: The version of the design.json schema this strokeopt writes. 1: the first (its files carry ``"version": 1``
 #: and no ``schema_version``; read as they are); 2: ``schema_version`` and the verdict of the verified
-#: pipeline (``verdict``, ``not_judged``). A file of a newer schema is refused (upgrade strokeopt).
+#: pipeline (``verdict``, ``not_judged``). A file of a newer schema is refused (upgrade strokeopt). A rotary load's
+#: quantities are under their own keys, in deg and rad/s (``stroke_deg``, ``position_deg``, ``v_max_rad_s``, the cam
+#: table's ``position_deg``: io/load_units.py); a rotary file written before them (mm-named keys holding rad x 1e3)
+#: is read as it is.
 SCHEMA_VERSION = 2
 
 
@@ -181,7 +194,7 @@ def design_json(design, resolution_deg: float = 0.1, spec: CamTableSpec | None =
     out["cam_table"] = {"resolution_deg": spec.resolution_deg, "master_unit": spec.master_unit,
                         "master_counts": spec.master_counts if spec.master_unit == "counts" else None,
                         "columns": cols, "rows": np.column_stack([table[c] for c in cols]).tolist()}
-    return out
+    return to_load_units(out, design.problem.timing.rotary)  # a rotary load: stroke_deg, v_max_rad_s, ...
 
 
 def write_cam_table(design, out_dir: str | Path, spec: CamTableSpec | None = None) -> list[Path]:
@@ -196,9 +209,9 @@ def write_cam_table(design, out_dir: str | Path, spec: CamTableSpec | None = Non
     spec = spec or CamTableSpec()
     out = Path(out_dir)
     table = cam_table(design, spec=spec)
-    units = {name: unit for name, unit, _ in CAM_COLUMNS}
+    units = {name: unit for name, unit, _ in CAM_COLUMNS + CAM_COLUMNS_ROTARY}
     units[spec.master_column] = "deg" if spec.master_unit == "deg" else "counts"
-    what = {name: text for name, _, text in CAM_COLUMNS}
+    what = {name: text for name, _, text in CAM_COLUMNS + CAM_COLUMNS_ROTARY}
     what[spec.master_column] = "master axis"
     header = [f"# {line}" for line in cam_table_header(design, spec)]
     header += [f"# column {c} [{units[c]}]: {what[c]}" for c in table]
@@ -325,6 +338,7 @@ def read_design(path: str | Path) -> tuple[dict, StrokeFunction]:
     if not isinstance(data, dict) or data.get("format") != "strokeopt-design":
         raise ProblemError(str(path), "format", "is not a strokeopt design file (format != 'strokeopt-design')")
     schema_version(data, str(path))
+    data = from_load_units(data)  # a rotary load's stroke_deg, position_deg, ... read as the linear keys
     validate_design(data, str(path))
     try:
         mesh = Mesh(int(data["mesh"]["intervals"]), int(data["mesh"]["degree"]))

@@ -16,6 +16,8 @@ import numpy as np
 from . import html as h
 from .design_report import ReportData, binding_check, sections_for
 from .machine import ELASTIC_CHAIN, drive_text
+from .units import is_rotary, load_label
+from ..io.load_units import load_key
 
 #: Which way a row is better: -1 lower, +1 higher, 0 neither (a fact, not a merit).
 LOWER, HIGHER, NEITHER = -1, 1, 0
@@ -194,7 +196,9 @@ def compare_report(datas: list[ReportData]) -> str:
             for s0 in [S[0]["objective_unit"]]]
     moves = min(len(s["moves"]) for s in S)
     for i in range(moves):
+        rotary = is_rotary(datas[0].problem)   # a rotary load's rad/s keys and labels (io/load_units.py)
         for k, label in (("a_max_m_s2", "a_max m/s2"), ("jerk_max_m_s3", "jerk_max m/s3"), ("v_max_m_s", "v_max m/s")):
+            k, label = load_key(k, rotary), load_label(label, rotary)
             rows.append(_row(f"move {i + 1} {label}", [s["moves"][i][k] for s in S], f"moves[{i}].{k}", LOWER))
     strokes, torques = plot_overlay(datas, names)
     built["stroke"] = _table(names, rows) + h.svg_figure(

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 from ..drive.checks import torque_limit_text
+from ..io.load_units import load_key
 from .format import format_table, format_value, period_text
 from ..design.result import Design, design_summary, move_direction  # noqa: F401 (design_summary: read from here too)
 from ..design.transcription.settings import DesignSettings
@@ -167,8 +168,8 @@ def design_text(design: Design, comparison: list[dict] | None = None) -> str:
     lines.append("")
     lines.append("active constraints: " + ("; ".join(design.active_constraints) or "none"))
     if comparison:
-        cols = [("law", "stroke"), ("a_max_m_s2", load_label("a_max m/s2", rotary)),
-                ("jerk_max_m_s3", load_label("jerk_max m/s3", rotary))]
+        cols = [("law", "stroke"), (load_key("a_max_m_s2", rotary), load_label("a_max m/s2", rotary)),
+                (load_key("jerk_max_m_s3", rotary), load_label("jerk_max m/s3", rotary))]
         if "peak_torque_N_m" in comparison[0]:
             cols += [(key, head) for key, head in (("peak_torque_N_m", "peak torque N m"),
                                                    ("rms_torque_N_m", "RMS torque N m"),

@@ -24,6 +24,8 @@ from . import html as h
 from .figures import PRINT_WIDTH_IN, legend_outside
 from .format import format_value, period_text
 from .machine import ELASTIC_CHAIN, NEEDLE_BAR, Machine, drive_text, machine_of
+from .units import is_rotary, load_label
+from ..io.load_units import load_key, to_load_units
 from .verification_section import section_verification
 
 #: The report's sections: (id, heading), in the order of the data flow; a report shows those its machine has
@@ -92,6 +94,7 @@ def gather(verified, summary: dict, source: str = "solved now") -> ReportData:
     nothing is computed here."""
     problem = verified.problem
     left = [n for n in (problem.scenes or {}) if n not in verified.scenes]
+    summary = to_load_units(summary, is_rotary(problem))  # a rotary load's keys, whatever the summary's source
     return ReportData(problem, verified.design, summary, verified.accuracy, dict(verified.scenes), left, versions(),
                       datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC"), source,
                       getattr(verified, "verification", None))
@@ -112,7 +115,8 @@ def plot_timing(problem, stroke, spm: float):
     sch = problem.timing.schedule(spm)
     fig, ax = plt.subplots(figsize=(PRINT_WIDTH_IN, 2.9), constrained_layout=True)
     k = stroke.sample(1441)
-    ax.plot(360 * k.t / stroke.period, k.s * 1e3, lw=1.4, color="tab:blue")
+    scale, unit = _position_scale(problem)
+    ax.plot(360 * k.t / stroke.period, k.s * scale, lw=1.4, color="tab:blue")
     shade_dwells(ax, problem.timing, spm)
     for itv, a0, a1 in zip(problem.timing.intervals, sch.start_angle_deg, sch.end_angle_deg):
         ax.axvline(a0, color="0.6", lw=0.6)
@@ -125,12 +129,17 @@ def plot_timing(problem, stroke, spm: float):
     ax.set_xlim(0, 360)
     ax.set_xticks(np.arange(0, 361, 45))
     ax.set_xlabel("cam angle [deg] (numbers: the intervals of the table)")
-    ax.set_ylabel(frame_label(f"{output} position", "mm"))
+    ax.set_ylabel(frame_label(f"{output} position", unit))
     ms = stroke.period * 1e3 / 360.0
     sec = ax.secondary_xaxis("top", functions=(lambda a: a * ms, lambda t: t / ms))
     sec.set_xlabel("time [ms]")
     ax.grid(True, alpha=0.3)
     return fig
+
+
+def _position_scale(problem) -> tuple[float, str]:
+    """The load's positions in the report: mm for a linear load, deg for a rotary one (SI x scale)."""
+    return (180 / math.pi, "deg") if is_rotary(problem) else (1e3, "mm")
 
 
 def motor_scale(problem, design) -> tuple[float, str]:
@@ -140,6 +149,8 @@ def motor_scale(problem, design) -> tuple[float, str]:
     if design.radius:
         return 1.0 / design.radius, f"output over the pulley radius {design.radius * 1e3:.3f} mm"
     mu = float(np.ravel(problem.transmission.transfer(np.zeros(1))[1])[0])
+    if is_rotary(problem):  # a gearbox: the load's angle is the motor's over the ratio
+        return 1.0 / mu, f"the load's angle times the {machine_of(problem).transmission}'s ratio {1 / mu:g}"
     return 1.0 / mu, f"output over the {machine_of(problem).transmission}'s ratio at 0 mm ({mu * 1e3:.4g} mm/rad)"
 
 
@@ -155,7 +166,8 @@ def plot_stroke(problem, design, law_stroke):
     draw_kinematics(list(axes), problem, [design.stroke, law_stroke], design.spm, n=1441)
     per_m, _ = motor_scale(problem, design)
     jerk_scale = 1e-3 if "[km" in axes[3].get_ylabel() else 1.0
-    for ax, (label, f) in zip(axes, [("motor angle [deg]", 1e-3 * per_m * 180 / math.pi),
+    position = per_m if is_rotary(problem) else 1e-3 * per_m * 180 / math.pi   # the left axis in deg or mm
+    for ax, (label, f) in zip(axes, [("motor angle [deg]", position),
                                      ("motor speed [rpm]", 60 / (2 * math.pi) * per_m),
                                      ("motor acc. [krad/s$^2$]", 1e-3 * per_m),
                                      ("motor jerk [Mrad/s$^3$]", 1e-6 * per_m / jerk_scale)]):
@@ -188,15 +200,16 @@ def plot_drive(design):
 
 def _interval_rows(problem, spm: float) -> list[list[str]]:
     sch = problem.timing.schedule(spm)
+    scale, _ = _position_scale(problem)
     rows = []
     for itv, a0, a1, t0, dur in zip(problem.timing.intervals, sch.start_angle_deg, sch.end_angle_deg,
                                     sch.t_start, sch.duration):
         rows.append([h.cell(itv.index), h.cell(itv.name), h.cell("move" if itv.is_move else "dwell"),
                      h.cell(itv.law.label if itv.is_move else "-"),
-                     h.cell(abs(itv.stroke) * 1e3 if itv.is_move else None),
+                     h.cell(abs(itv.stroke) * scale if itv.is_move else None),
                      h.cell(("up" if itv.stroke > 0 else "down") if itv.is_move else "-"),
                      h.cell(a0), h.cell(a1), h.cell(t0 * 1e3), h.cell((t0 + dur) * 1e3),
-                     h.cell(itv.start_position * 1e3), h.cell("handover" if itv.handover else "")])
+                     h.cell(itv.start_position * scale), h.cell("handover" if itv.handover else "")])
     return rows
 
 
@@ -236,12 +249,13 @@ def section_problem(d: ReportData) -> str:
                   ("peak step rate [Hz]", rate and rate["value"], None)]
     else:
         facts += [("RMS torque [N m]", s["rms_torque_N_m"], "rms_torque_N_m")]
-    head = ["#", "interval", "kind", "law", "stroke mm", "direction", "from deg", "to deg", "from ms", "to ms",
-            "start position mm", "handover"]
+    scale, unit = _position_scale(p)
+    head = ["#", "interval", "kind", "law", f"stroke {unit}", "direction", "from deg", "to deg", "from ms", "to ms",
+            f"start position {unit}", "handover"]
     sch = p.timing.schedule(s["spm"])
     moves = [i for i in p.timing.intervals if i.is_move]
     what = (f"{len(moves)} move{'s' if len(moves) != 1 else ''} of "
-            + ", ".join(f"{abs(i.stroke) * 1e3:g} mm {'up' if i.stroke > 0 else 'down'}" for i in moves))
+            + ", ".join(f"{abs(i.stroke) * scale:g} {unit} {'up' if i.stroke > 0 else 'down'}" for i in moves))
     handover = p.timing.handover_move
     hand = (f"; the handover (dashed) ends move {handover.move_index} at {sch.end_angle_deg[handover.index - 1]:.1f} deg"
             if handover is not None else "; the machine has no handover")
@@ -260,8 +274,9 @@ COMPARISON_COLUMNS = [("a_max_m_s2", "a_max m/s2"), ("jerk_max_m_s3", "jerk_max 
                       ("step_rate_Hz", "step rate Hz")]
 
 
-def comparison_table(comparison: list[dict], objective: str, prefix: str = "comparison") -> str:
-    cols = [(k, head) for k, head in COMPARISON_COLUMNS if any(r.get(k) is not None for r in comparison)]
+def comparison_table(comparison: list[dict], objective: str, prefix: str = "comparison", rotary: bool = False) -> str:
+    cols = [(load_key(k, rotary), load_label(head, rotary)) for k, head in COMPARISON_COLUMNS]
+    cols = [(k, head) for k, head in cols if any(r.get(k) is not None for r in comparison)]
     if any(r.get("vs_optimal_pct") is not None for r in comparison):  # min_time, min_handover_error: none
         cols.append(("vs_optimal_pct", f"{objective} vs optimal %"))
     rows = []
@@ -273,24 +288,26 @@ def comparison_table(comparison: list[dict], objective: str, prefix: str = "comp
 
 def section_stroke(d: ReportData) -> str:
     s, m = d.summary, d.machine
-    moves = [[h.cell(mv["index"], f"moves[{i}].index"), h.cell(mv["stroke_mm"], f"moves[{i}].stroke_mm"),
+    rotary = is_rotary(d.problem)   # a rotary load: deg, rad/s, rad/s2, rad/s3 (io/load_units.py)
+    keys = [load_key(k, rotary) for k in ("stroke_mm", "v_max_m_s", "a_max_m_s2", "jerk_max_m_s3")]
+    moves = [[h.cell(mv["index"], f"moves[{i}].index"), h.cell(mv[keys[0]], f"moves[{i}].{keys[0]}"),
               h.cell(mv["direction"]), h.cell(mv["duration_s"] * 1e3),
-              h.cell(mv["v_max_m_s"], f"moves[{i}].v_max_m_s"), h.cell(mv["a_max_m_s2"], f"moves[{i}].a_max_m_s2"),
-              h.cell(mv["jerk_max_m_s3"], f"moves[{i}].jerk_max_m_s3"), h.cell(mv["C_a"], f"moves[{i}].C_a")]
+              *(h.cell(mv[k], f"moves[{i}].{k}") for k in keys[1:]), h.cell(mv["C_a"], f"moves[{i}].C_a")]
              for i, mv in enumerate(s["moves"])]
     law = d.problem.stroke(s["spm"])
     _, how = motor_scale(d.problem, d.design)
-    a_opt = max(mv["a_max_m_s2"] for mv in s["moves"])
+    a_opt = max(mv[keys[2]] for mv in s["moves"])
     a_law = float(np.max(np.abs(law.sample(1441).a)))
+    acc = "rad/s\u00b2" if rotary else "m/s\u00b2"
     caption = (f"The optimal stroke of the {m.output} against the problem's law ({law.label}) over the whole cam "
-               f"cycle: peak |acceleration| {a_opt:.4g} m/s\u00b2 against the law's {a_law:.4g} m/s\u00b2. Left axes: the "
+               f"cycle: peak |acceleration| {a_opt:.4g} {acc} against the law's {a_law:.4g} {acc}. Left axes: the "
                f"{m.output}; right axes: the motor ({how}).")
-    out = h.heading("Moves") + h.table(["move", "stroke mm", "direction", "move time ms", "v_max m/s",
-                                        "a_max m/s2", "jerk_max m/s3", "C_a"], moves)
+    head = ["move", "stroke mm", "direction", "move time ms", "v_max m/s", "a_max m/s2", "jerk_max m/s3", "C_a"]
+    out = h.heading("Moves") + h.table([load_label(x, rotary) for x in head], moves)
     out += h.svg_figure(plot_stroke(d.problem, d.design, law), caption)
     if s.get("comparison"):
         out += h.heading(f"Comparison with the classic laws on the same drive ({drive_text(m, s)})") \
-            + comparison_table(s["comparison"], s["objective"])
+            + comparison_table(s["comparison"], s["objective"], rotary=rotary)
         note = "Laws marked 'no' break the design problem's constraints (listed last)"
         out += h.para(note + ("; the laws' handover accuracy is not checked." if m.handover else "."), "note")
     return out
