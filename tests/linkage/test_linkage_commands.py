@@ -88,6 +88,13 @@ def test_size_of_a_linkage_is_the_library_s(capsys, tmp_path):
     assert min(c["rated_torque_N_m"] for c in fits) == chosen["rated_torque_N_m"] == 8.0
 
 
+def test_size_of_a_linkage_without_masses_says_so(capsys):
+    # the blind-stitch file states no masses: no torque to size for, and the report says what is left
+    out = _json(capsys, ["size", str(BLIND), "--json"])
+    assert "no masses" in out["note"] and out["dynamics"]["torque_N_m"]["rms"] == 0.0
+    assert _json(capsys, ["size", str(LOOM), "--json"])["note"] is None
+
+
 def test_size_text_and_an_infeasible_rate(capsys):
     assert main(["size", str(LOOM), "--plot", "none"]) == 0
     text = capsys.readouterr().out

@@ -125,7 +125,10 @@ def size_summary(problem, motors: list[str] | None = None, extra_catalogues=(), 
     loads = [{"name": ld.name, "link": ld.link, "joint": ld.joint, "from_deg": round(math.degrees(ld.start), 6),
               "to_deg": round(math.degrees(ld.end), 6), "force_start_N": ld.force_start, "force_end_N": ld.force_end,
               "direction_deg": round(math.degrees(ld.direction), 6)} for ld in problem.linkage.loads]
-    return {"status": "ok" if sizing.chosen is not None else "infeasible", "problem": problem.name,
+    massless = not (any(k.mass > 0 or k.inertia_cg > 0 for k in problem.linkage.links) or problem.linkage.loads)
+    note = ("the file states no masses, inertias or process loads: the crank needs no torque, and the sizing checks "
+            "only the motors' speed and the gearboxes' inertia" if massless else None)
+    return {"status": "ok" if sizing.chosen is not None else "infeasible", "problem": problem.name, "note": note,
             "file": problem.file, "rpm": problem.rpm, "omega_rad_s": problem.omega,
             "gravity_m_s2": problem.linkage.gravity, "process_loads": loads,
             "transmission": transmission_summary(kin, cycle, problem.min_transmission_index), "dynamics": dyn.to_dict(),

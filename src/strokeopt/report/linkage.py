@@ -176,6 +176,7 @@ def linkage_size_text(s: dict, explain: bool = False) -> str:
         lines.append(f"process load {ld['name']} on {ld['link']} at {ld['joint']}: {ld['force_start_N']:g} -> "
                      f"{ld['force_end_N']:g} N over crank {ld['from_deg']:g} -> {ld['to_deg']:g} deg, "
                      f"{ld['direction_deg']:g} deg from the link's line")
+    lines += [f"note: {s['note']}"] if s.get("note") else []
     lines += [_dynamics_text(d), format_table(s["terms"][::max(1, len(s["terms"]) // 36)], TERM_COLUMNS), "",
               f"{z['drive']}; motors from {', '.join(z['motors_from'])}, gearboxes from {z['gearboxes_from']}",
               format_table(z["candidates"], SIZE_COLUMNS)]

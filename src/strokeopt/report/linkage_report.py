@@ -140,7 +140,8 @@ def _torque(d: LinkageReportData) -> str:
               f"least RMS torque; binding {c['binding']} (margin {c['margin']:.3f})." if c else
               "No motor and gearbox of the catalogue carries the crank.")
     return (h.para(f"At a constant {s['rpm']:g} rpm the crank needs M = J' w^2 / 2 + V' - sum F (u . r') (power "
-                   "balance); Newton-Euler's balances of every link give the same torque.") + h.key_table(facts)
+                   "balance); Newton-Euler's balances of every link give the same torque.")
+            + (h.para("Note: " + s["note"], "note") if s.get("note") else "") + h.key_table(facts)
             + (h.heading("Process loads") + h.table(["load", "on", "from deg", "to deg", "start N", "end N"], loads)
                if loads else "")
             + h.svg_figure(plot_linkage_size(d.kin, d.cycle, d.dynamics, s, None),
