@@ -186,3 +186,11 @@ def test_a_problem_of_another_machine_is_named(capsys):
     assert main(["linkage", str(reference), "--plot", "none"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "transmission.type" in err[0] and "is belt_pulley" in err[0]
+
+
+@pytest.mark.parametrize("command", ["solve", "simulate", "accuracy", "tradeoff"])
+def test_a_stroke_command_on_a_linkage_file_says_what_the_file_is_for(capsys, command):
+    # it used to answer "machine.spm: is required but missing", a field a linkage file does not have
+    assert main([command, str(LOOM)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "transmission.type" in err and "strokeopt linkage, kinematics" in err

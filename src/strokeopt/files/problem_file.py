@@ -22,12 +22,21 @@ from ..problem import Problem, parse_problem
 EXTENDS_DEPTH_MAX = 8
 
 
+#: What a linkage problem file is for, where a command that designs a stroke is given one.
+LINKAGE_FILE_HERE = ('"linkage": a crank-driven linkage file, read by strokeopt linkage, kinematics, size and '
+                     'report; solve, simulate, accuracy, tradeoff and robust design a stroke for a member driven '
+                     'by a motor (for the loom\'s sley driven by a servo: problems/loom_beatup_servo.toml)')
+
+
 def load_problem(path: str | Path, overrides: list[str] | None = None) -> Problem:
     """Read, extend, override and validate a problem file; ``overrides`` are ``--set`` texts
     (``"machine.spm=600"``)."""
     path = Path(path)
     file = str(path)
     data = read_problem_data(path)
+    transmission = data.get("transmission")
+    if isinstance(transmission, dict) and transmission.get("type") == "linkage":
+        raise ProblemError(file, "transmission.type", LINKAGE_FILE_HERE)
     if isinstance(overrides, str):  # one override given as a string, not as a list of them
         overrides = [overrides]
     overrides = list(overrides or [])
