@@ -207,7 +207,12 @@ def _sim_options(args):
 
     # hard contact switches only: smoothing them is a numerical study device (SimulationOptions.smoothing,
     # --study tolerance shows its bias), not a model option; at ordinary widths it changes the answer
-    return SimulationOptions(method=args.method, rtol=args.rtol, atol=args.atol, verbose=args.verbose)
+    options = SimulationOptions(method=args.method, rtol=args.rtol, atol=args.atol, verbose=args.verbose)
+    try:
+        options.check()
+    except ProblemError as exc:  # the library names its field; the command line names its option
+        raise ProblemError(f"--{exc.field}", "", exc.message) from None
+    return options
 
 
 def _scene_name(args, problem) -> str:

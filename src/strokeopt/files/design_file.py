@@ -45,6 +45,7 @@ import numpy as np
 from ..design.transcription.collocation import Mesh, MoveSolution, move_piece
 from ..errors import ProblemError, SolverError
 from ..problem import SPM_RANGE
+from .design_schema import validate_reported
 from .problem_file import load_problem
 from ..io.fields import Fields
 from ..io.load_units import from_load_units, load_key, to_load_units
@@ -266,7 +267,8 @@ def check_out_dir(path: str | Path, option: str = "--out") -> Path:
 
 def validate_design(data: dict, file: str) -> None:
     """Check what :func:`read_design` rebuilds the stroke from, as a problem file is checked: every field
-    present, of its type, finite and in range, every ``unit_solution`` of the mesh's shape. Raises
+    present, of its type, finite and in range, every ``unit_solution`` of the mesh's shape; then the rest a
+    command reads (design_schema.py: the moves' peaks, the checks, the drive, the comparison). Raises
     :class:`ProblemError` naming the file and the field (``moves[1].unit_solution.S``)."""
     top = Fields(data, file)
     mesh = top.table("mesh")
@@ -303,6 +305,7 @@ def validate_design(data: dict, file: str) -> None:
     if not isinstance(overrides, list) or not all(isinstance(o, str) and "=" in o for o in overrides):
         raise top.error("overrides", "must be a list of the --set texts ('key.path=value') the design was solved "
                                      "with: the design file is damaged")
+    validate_reported(top)  # the numbers, checks, drive and comparison every other command reads
 
 
 def design_overrides(data: dict) -> list[str]:
