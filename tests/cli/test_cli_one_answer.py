@@ -67,9 +67,10 @@ def test_solve_reports_the_handover_error_accuracy_design_prints(capsys, referen
     acc = _json(capsys, ["accuracy", str(reference_path), "--design", str(solved)])
     assert row["value"] == pytest.approx(acc["handover_error_mm"], rel=1e-6)
     assert "full servo simulation" in row["name"] and row["unit"] == "mm"
-    # the design term beside it: the handover window at 25 instants, continuous reference; within 10 %
-    # of the full simulation (0.0431 against 0.0415 mm; the end of the move alone gave 0.0315 mm, 24 % less)
-    assert row["design_term"] > 0 and row["design_term"] == pytest.approx(row["value"], rel=0.10)
+    # the design term beside it: the full simulation's error at 25 instants of the handover window, every
+    # table phase, within 2 % of it (0.04152 against 0.04152 mm; the continuous-reference kernel with the
+    # classic stroke's load error gave 0.0431 mm, the end of the move alone 0.0315 mm)
+    assert row["design_term"] > 0 and row["design_term"] == pytest.approx(row["value"], rel=0.02)
     # both texts print the same digits
     code, out, _ = _run(capsys, ["accuracy", str(reference_path), "--design", str(solved), "--plot", "none"])
     number = f"{acc['handover_error_mm']:.4g}"

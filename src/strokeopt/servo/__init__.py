@@ -8,7 +8,8 @@ Modules in data-flow order:
 * ``loop``      -- the drive's cascade controller: tuning, margins, the closed loop, its periodic response;
 * ``accuracy``  -- the handover accuracy prediction (:class:`AccuracyResult`, ``strokeopt accuracy``);
 * ``error_expression`` -- the form of a handover error term in the design's NLP (:class:`ErrorExpression`);
-* ``kernel``    -- the servo's term of the design's handover-accuracy constraint.
+* ``table_term`` -- the full simulation's handover error as rows linear in the design's variables;
+* ``kernel``    -- the servo's term of the design's handover-accuracy constraint (those rows in the NLP).
 
 The trade-off of accuracy against stitch rate (``strokeopt tradeoff``) is a study: :mod:`strokeopt.studies.tradeoff`.
 

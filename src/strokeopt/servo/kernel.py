@@ -1,5 +1,7 @@
-"""The servo's term of the design's handover-accuracy constraint (an exact linear functional of the move
-accelerations): :class:`ServoErrorTerm`, passed to the design as one of ``Problem.error_terms``.
+"""The servo's term of the design's handover-accuracy constraint: :class:`ServoErrorTerm`, passed to the
+design as one of ``Problem.error_terms``: the full servo simulation's error over the handover window as rows
+linear in the move accelerations (:mod:`.table_term`). :class:`ErrorKernel` is the error of the loop with a
+continuous reference as a functional of the acceleration (the loop's linearity, checked by the tests).
 
 The design does not import this module: the problem file (:mod:`strokeopt.files.problem_file`) gives the
 term to a problem with a ``[servo]`` section, and :func:`strokeopt.design.solve.solve_design` takes it
@@ -13,12 +15,13 @@ from typing import ClassVar
 
 import numpy as np
 
-from .accuracy import handover_accuracy
+from .accuracy import TABLE_PHASES
 from .error_expression import ErrorExpression
 from .loop import Gains, build_loop, tuned_gains as _tuned
 from .lti import forced_response
 from .plant import DriveAxis, axis_from_problem
 from .settings import ServoSettings
+from .table_term import PositionMap, error_rows, table_response
 
 
 
@@ -84,26 +87,22 @@ def error_kernel(axis: DriveAxis, settings: ServoSettings, gains: Gains, period:
     return _KERNELS[key]
 
 
-#: Gauss-Legendre points per mesh interval for the error functional in the design.
-KERNEL_POINTS = 6
-
-
 @dataclass(frozen=True)
 class ServoErrorTerm:
     """The servo's handover error term of the design (a :class:`strokeopt.design.transcription.request.ErrorTerm`):
     the bar's error over the handover window (the end of the handover move and :data:`WINDOW_POINTS`
-    instants after it) from the servo loop and the belt, ``|e_motion + e_load| + one count`` at each.
+    instants of the simulation's grid after it) for every table phase, ``|e| + one count`` at each.
 
-    ``e_motion`` is exact for the linear loop (continuous reference): a linear
-    functional of the move accelerations (:class:`ErrorKernel`), the weights
-    entering the NLP as parameters, so a solver built for one speed serves
-    another. ``e_load`` (the load forces: springs, gravity) is taken from the
-    simulation of the problem's classic stroke at the same speed. With a
-    continuous pulley radius or a motor choice the kernel is that of the
-    problem's own pulley and motor (an approximation; re-check the result with
-    ``strokeopt accuracy``). The term has no parameters: it reads ``problem.servo`` at
-    solve time (no term when the problem has no ``[servo]`` section). The problem file gives
-    it to every problem with a ``[servo]`` section (``Problem.error_terms``).
+    ``e`` is the full servo simulation's error (:mod:`.table_term`: the sampled position table, its
+    feed-forwards, the belt and the load forces), as rows linear in the moves' variables: exact for the
+    motion, the load forces linearised about the solve's start stroke (the warm start), so the rows are
+    exact at that stroke; the design re-linearises at its solution until the error there settles
+    (:data:`LOAD_PASSES`). The rows enter the NLP as parameters, so a solver built for one speed serves
+    another. With a continuous pulley radius or a motor choice the loop is that of the problem's own
+    pulley and motor (an approximation; the solve's check row shows the full simulation beside it). The
+    term has no parameters: it reads ``problem.servo`` at solve time (no term when the problem has no
+    ``[servo]`` section). The problem file gives it to every problem with a ``[servo]`` section
+    (``Problem.error_terms``).
     """
 
     name: ClassVar[str] = "servo loop and belt"
@@ -122,30 +121,115 @@ class ServoErrorTerm:
             return None
         if problem.timing.handover_move is None:
             return None
-        x_q = (np.polynomial.legendre.leggauss(KERNEL_POINTS)[0] + 1) / 2
         b = nlp.built
-        n = req.mesh.intervals
-        errors = 0
+        rows = (WINDOW_POINTS + 1) * len(TABLE_PHASES)
+        errors = b.params("servo error at the start stroke", lambda r: _servo_numbers(r)["const"], (rows, 1))
         for k, mv in enumerate(req.moves):
-            w_sym = b.params(f"servo kernel move {mv.index}", lambda r, k=k: _servo_numbers(r)["weights"][k],
-                             (WINDOW_POINTS + 1, n * KERNEL_POINTS))
-            a = ca.vec(nlp.si(k, x_q, "a"))  # column-major: the same order as the kernel's sigma
-            errors = errors + ca.mtimes(w_sym, a)
-        load = b.params("servo load error", lambda r: _servo_numbers(r)["load"], (WINDOW_POINTS + 1, 1))
+            z = ca.vec(nlp.vars[k].A)
+            w_sym = b.params(f"servo error rows move {mv.index}", lambda r, k=k: _servo_numbers(r)["rows"][k],
+                             (rows, z.shape[0]))
+            errors = errors + ca.mtimes(w_sym, z)
         quant = b.param("servo encoder count", lambda r: _servo_numbers(r)["count"])
-        return ErrorExpression(errors + load, quant)
+        return ErrorExpression(errors, quant)
+
+
+#: Passes of the load forces' linearisation at most: a design that holds the accuracy re-solves from its
+#: solution, linearised there, until the error there is within the accuracy (``check_tolerance``) or this
+#: many solves have been made with it held.
+LOAD_PASSES = 4
+
+
+def move_layout(mesh) -> int:
+    """Variables of one move in a :class:`PositionMap`: interval-start S and V, node accelerations A (column-major)."""
+    return 2 * (mesh.intervals + 1) + mesh.intervals * (mesh.degree + 1)
+
+
+def integration_map(mesh) -> np.ndarray:
+    """``(S, V, vec(A))`` of a move from rest as a matrix of ``vec(A)``: the interval-start positions and
+    speeds are the exact integrals of the acceleration polynomials (what the collocation's continuity rows
+    hold). The term's rows then touch the accelerations alone, which keeps the dense block they make in
+    the solver's factorisation a third of the size."""
+    n, d, h = mesh.intervals, mesh.degree, mesh.h
+    na = n * (d + 1)
+    m = mesh.matrices([1.0])
+    out = np.zeros((move_layout(mesh), na))
+    out[2 * (n + 1):] = np.eye(na)
+    s_row, v_row = np.zeros(na), np.zeros(na)
+    for i in range(n):
+        out[i], out[n + 1 + i] = s_row, v_row
+        s_row = s_row + h * v_row + h**2 * _spread(m["s"][0], n, i)
+        v_row = v_row + h * _spread(m["v"][0], n, i)
+    out[n], out[2 * n + 1] = s_row, v_row
+    return out
+
+
+def _spread(coefficients: np.ndarray, n: int, i: int) -> np.ndarray:
+    """A row over ``vec(A)`` with ``coefficients`` on interval ``i``'s node accelerations."""
+    row = np.zeros(n * len(coefficients))
+    row[np.arange(len(coefficients)) * n + i] = coefficients
+    return row
+
+
+def position_map(req, times: np.ndarray) -> PositionMap:
+    """The stroke of a solve at ``times`` (seconds from the cycle start, within one cycle) as a
+    :class:`PositionMap` of the moves' unit variables (``S``, ``V``, ``A`` of each move, :func:`move_layout`):
+    a dwell's position is a constant, a move's ``start + stroke * (S_i + h theta V_i + h^2 (A_i . m_s(theta)))``."""
+    timing = req.problem.timing
+    sch = req.schedule
+    mesh = req.mesh
+    n, h = mesh.intervals, mesh.h
+    times = np.asarray(times, dtype=float)
+    which = np.clip(np.searchsorted(sch.t_start, times, side="right") - 1, 0, len(timing.intervals) - 1)
+    const = np.zeros(len(times))
+    mats = [np.zeros((len(times), move_layout(mesh))) for _ in req.moves]
+    by_interval = {mv.interval: (k, mv) for k, mv in enumerate(req.moves)}
+    for i, itv in enumerate(timing.intervals):
+        sel = np.flatnonzero(which == i)
+        if not len(sel):
+            continue
+        if itv.index not in by_interval:
+            const[sel] = itv.start_position
+            continue
+        k, mv = by_interval[itv.index]
+        tau = np.clip((times[sel] - sch.t_start[i]) / sch.duration[i], 0.0, 1.0)
+        j = np.minimum((tau / h).astype(int), n - 1)
+        theta = tau / h - j
+        m_s = mesh.matrices(theta)["s"]  # (points, d + 1)
+        const[sel] = mv.start
+        rows = mats[k]
+        rows[sel, j] = mv.stroke
+        rows[sel, n + 1 + j] = mv.stroke * h * theta
+        for c in range(mesh.degree + 1):
+            rows[sel, 2 * (n + 1) + c * n + j] = mv.stroke * h**2 * m_s[:, c]
+    return PositionMap(const, tuple(mats))
+
+
+def check_instants(resp, t_end: float, window: float) -> np.ndarray:
+    """The instants the term checks as ``(j, w)`` rows of the simulation's grid (the error ``(1 - w) e[j] +
+    w e[j + 1]``): the end of the handover move ``t_end`` (seconds, the loop delay included), interpolated
+    as the simulation reads it, and :data:`WINDOW_POINTS` grid instants spread evenly over the window after it."""
+    h = resp.period / resp.n
+    t0 = resp.t[0]
+    pos = (t_end - t0) / h
+    first = int(np.floor(pos))
+    out = [(first, pos - first)]
+    last = int(np.floor((t_end + window - t0) / h + 1e-9))
+    start = first + 1
+    picks = np.unique(np.round(np.linspace(start, max(start, last), WINDOW_POINTS)).astype(int))
+    picks = np.concatenate([picks, np.full(WINDOW_POINTS - len(picks), picks[-1])])  # a short window repeats
+    out += [(int(p), 0.0) for p in picks]
+    return np.array(out, dtype=float)
 
 
 def _servo_numbers(req) -> dict:
-    """The numbers of :class:`ServoErrorTerm` for one solve (speed, motor, pulley): kernel weights
-    per move, load error, encoder count. Computed once per solve (``req.cache``, the solve's
+    """The numbers of :class:`ServoErrorTerm` for one solve (speed, motor, pulley, start stroke): the error
+    rows per move, their constant, the encoder count. Computed once per solve (``req.cache``, the solve's
     :class:`~strokeopt.design.transcription.request.SolveRequest`)."""
     cache = req.cache
     if "servo" in cache:
         return cache["servo"]
     problem = req.problem
     settings = problem.servo
-    spm = float(req.spm)
     timing = problem.timing
     move_h = timing.handover_move
     choice = req.choice
@@ -153,56 +237,25 @@ def _servo_numbers(req) -> dict:
     teeth = choice.teeth if choice is not None and choice.teeth is not None else problem.pulley_teeth
     axis = axis_from_problem(problem, settings, motor=motor, pulley_teeth=teeth)
     gains = _tuned(axis, settings)
-    sch = timing.schedule(spm)
+    sch = req.schedule
     period = float(sch.period)
-    kernel = error_kernel(axis, settings, gains, period)
+    resp = table_response(axis, settings, gains, period)
     t_h = float(sch.t_start[move_h.index - 1] + sch.duration[move_h.index - 1])
-    # the instants checked: the end of the handover move and WINDOW_POINTS more over the handover window
-    t_check = t_h + np.linspace(0.0, settings.handover_window / 360.0 * period * (WINDOW_POINTS > 0),
-                                WINDOW_POINTS + 1)
-    x_q, w_q = np.polynomial.legendre.leggauss(KERNEL_POINTS)
-    x_q, w_q = (x_q + 1) / 2, w_q / 2
-    n = req.mesh.intervals
-    weights = []
-    for mv in req.moves:
-        t0 = float(sch.t_start[mv.interval - 1])
-        dur = float(sch.duration[mv.interval - 1])
-        sigma = (t0 + (np.arange(n).reshape(-1, 1) + x_q.reshape(1, -1)) * dur / n).ravel(order="F")
-        w = np.tile(w_q, (n, 1)).ravel(order="F") * dur / n
-        weights.append(kernel(t_check.reshape(-1, 1) + kernel.delay - sigma.reshape(1, -1)) * w.reshape(1, -1))
-    cache["servo"] = {"weights": weights, "load": _load_error(problem, settings, axis, gains, spm, t_check),
+    instants = check_instants(resp, t_h + settings.sum_small_time_constants, settings.handover_window / 360.0 * period)
+    z0 = [np.concatenate([s, v, np.asarray(a).ravel(order="F")]) for s, v, a in req.start]
+    e0, rows = error_rows(resp, axis, settings, instants, lambda t: position_map(req, t), z0)
+    to_a = integration_map(req.mesh)
+    rows = [g @ to_a for g in rows]
+    const = e0 - sum(g @ np.asarray(a).ravel(order="F") for g, (_, _, a) in zip(rows, req.start))
+    cache["servo"] = {"rows": rows, "const": const.reshape(-1, 1),
                       "count": 2 * math.pi * axis.radius / settings.encoder_counts}
     return cache["servo"]
 
 
-#: Instants after the end of the handover move checked in the design, spread evenly over the
-#: handover window (the end of the move is one more): the full simulation takes the largest error
-#: over the window, and a design that checked the end alone would place a zero of the residual
-#: vibration there. Each instant is a pair of linear rows of the NLP (:class:`ErrorExpression`).
-#: 24 instants space the 5.4 ms window at 617 spm by 1/11 of the 1.9 ms belt period of the
-#: reference drive (a peak between them is underestimated by at most 4 % of the vibration's
-#: amplitude; the full simulation confirms); 48 made a ``min_time`` solve at 0.03 mm 30 % slower.
+#: Grid instants after the end of the handover move checked in the design, spread evenly over the
+#: handover window (the end of the move is one more), for each of the simulation's table phases: the full
+#: simulation takes the largest error over the window's grid, and a design that checked the end alone would
+#: place a zero of the residual vibration there. Each instant is a pair of linear rows of the NLP
+#: (:class:`ErrorExpression`). 24 instants space the 5.4 ms window at 617 spm by 1/11 of the 1.9 ms belt
+#: period of the reference drive.
 WINDOW_POINTS = 24
-
-
-#: Load errors by the values that determine them (timing, axis, servo settings, gains, speed); bounded.
-_LOAD_ERRORS: dict = {}
-_LOAD_ERRORS_SIZE = 32
-
-
-def _load_error(problem, settings: ServoSettings, axis: DriveAxis, gains: Gains, spm: float,
-                t_check: np.ndarray) -> np.ndarray:
-    """Bar error at the instants ``t_check`` (from the start of the cycle) caused by the load forces
-    alone (classic stroke, this speed)."""
-    key = (problem.timing, axis, settings, gains, spm, tuple(np.round(t_check, 12)))
-    if key not in _LOAD_ERRORS:
-        if axis.load is None:
-            value = np.zeros((len(t_check), 1))
-        else:
-            res = handover_accuracy(problem, spm=spm, settings=settings, axis=axis, gains=gains)
-            t = t_check + settings.sum_small_time_constants
-            value = np.interp(t, res.t, res.error_load).reshape(-1, 1)
-        if len(_LOAD_ERRORS) >= _LOAD_ERRORS_SIZE:
-            _LOAD_ERRORS.pop(next(iter(_LOAD_ERRORS)))
-        _LOAD_ERRORS[key] = value
-    return _LOAD_ERRORS[key]

@@ -221,7 +221,7 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
     from the previous accuracy's; then its full simulation (:func:`handover_accuracy`: table
     sampling, load forces, the handover window, the torque command). A rate counts only when the
     full simulation meets the accuracy without the torque command passing its limit: the design's
-    own term sees the end of the move with a continuous reference only. When the simulation rejects
+    own term is the simulation's error at instants of the handover window, but not its torque command. When the simulation rejects
     the ``min_time`` design, the rate is searched below it (it bounds every design's rate) with the
     design of the file's objective at fixed rates, each confirmed the same way (a step down by the
     simulation's excess; a safeguarded secant to half the resolution). A tighter accuracy never gets a higher rate
