@@ -123,14 +123,19 @@ class ServoErrorTerm:
             return None
         b = nlp.built
         rows = (WINDOW_POINTS + 1) * len(TABLE_PHASES)
-        errors = b.params("servo error at the start stroke", lambda r: _servo_numbers(r)["const"], (rows, 1))
-        for k, mv in enumerate(req.moves):
-            z = ca.vec(nlp.vars[k].A)
-            w_sym = b.params(f"servo error rows move {mv.index}", lambda r, k=k: _servo_numbers(r)["rows"][k],
-                             (rows, z.shape[0]))
-            errors = errors + ca.mtimes(w_sym, z)
+        parts = []
+        for part in ("motion", "load"):
+            errors = b.params(f"servo {part} error constant", lambda r, p=part: _servo_numbers(r)[p][0], (rows, 1))
+            for k, mv in enumerate(req.moves):
+                z = ca.vec(nlp.vars[k].A)
+                w_sym = b.params(f"servo {part} error rows move {mv.index}",
+                                 lambda r, k=k, p=part: _servo_numbers(r)[p][1][k], (rows, z.shape[0]))
+                errors = errors + ca.mtimes(w_sym, z)
+            parts.append(errors)
+        # a free cycle time (min_time): the rows are the error at the request's rate (time scale 1); the motion's
+        # error follows the accelerations, 1/scale^2 of the unit form's (the fixed point of the rate is exact)
         quant = b.param("servo encoder count", lambda r: _servo_numbers(r)["count"])
-        return ErrorExpression(errors, quant)
+        return ErrorExpression(parts[0] / nlp.time_scale**2 + parts[1], quant)
 
 
 #: Passes of the load forces' linearisation at most: a design that holds the accuracy re-solves from its
@@ -243,12 +248,14 @@ def _servo_numbers(req) -> dict:
     t_h = float(sch.t_start[move_h.index - 1] + sch.duration[move_h.index - 1])
     instants = check_instants(resp, t_h + settings.sum_small_time_constants, settings.handover_window / 360.0 * period)
     z0 = [np.concatenate([s, v, np.asarray(a).ravel(order="F")]) for s, v, a in req.start]
-    e0, rows = error_rows(resp, axis, settings, instants, lambda t: position_map(req, t), z0)
     to_a = integration_map(req.mesh)
-    rows = [g @ to_a for g in rows]
-    const = e0 - sum(g @ np.asarray(a).ravel(order="F") for g, (_, _, a) in zip(rows, req.start))
-    cache["servo"] = {"rows": rows, "const": const.reshape(-1, 1),
-                      "count": 2 * math.pi * axis.radius / settings.encoder_counts}
+    a0 = [np.asarray(a).ravel(order="F") for _, _, a in req.start]
+    out = {"count": 2 * math.pi * axis.radius / settings.encoder_counts}
+    for part, (e0, rows) in zip(("motion", "load"),
+                                error_rows(resp, axis, settings, instants, lambda t: position_map(req, t), z0)):
+        rows = [g @ to_a for g in rows]
+        out[part] = ((e0 - sum(g @ a for g, a in zip(rows, a0))).reshape(-1, 1), rows)
+    cache["servo"] = out
     return cache["servo"]
 
 

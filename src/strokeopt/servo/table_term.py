@@ -131,11 +131,12 @@ def _travel(s: np.ndarray) -> np.ndarray:
 
 
 def error_rows(resp: TableResponse, axis: DriveAxis, settings: ServoSettings, instants: np.ndarray,
-               position_map, z0: list) -> tuple[np.ndarray, list]:
-    """The bar error at ``instants`` (rows: ``(c, j, w)`` = the error ``(1 - w) e[j] + w e[j + 1]`` at grid
-    indices ``j``, ``j + 1``) for every table phase, phase after phase, as ``e0 + G (z - z0)``: returns ``e0``
-    (the error of the stroke ``z0``) and ``G`` per move. ``position_map(times)`` is the :class:`PositionMap`
-    of the stroke at ``times`` (seconds from the cycle start)."""
+               position_map, z0: list) -> tuple[tuple[np.ndarray, list], tuple[np.ndarray, list]]:
+    """The bar error at ``instants`` (rows: ``(j, w)`` = the error ``(1 - w) e[j] + w e[j + 1]`` at grid
+    indices ``j``, ``j + 1``) for every table phase, phase after phase, as ``e0 + G (z - z0)``, in two parts:
+    the motion's (exact: linear) and the load forces' (linearised about the stroke ``z0``), each ``(e0, G)``
+    with ``G`` per move. ``position_map(times)`` is the :class:`PositionMap` of the stroke at ``times``
+    (seconds from the cycle start)."""
     n, d, r = resp.n, resp.delay, axis.radius
     grid_t = resp.t[:n]
     idx = np.concatenate([instants[:, 0], instants[:, 0] + 1]).astype(int)
@@ -149,21 +150,22 @@ def error_rows(resp: TableResponse, axis: DriveAxis, settings: ServoSettings, in
 
     force = (lambda s: axis.external_force(s)) if axis.load is not None else None
     commanded = position_map(np.mod(grid_t[grid] - d, resp.period))
-    e0_parts, g_parts = [], []
+    motion, load = ([], []), ([], [])
     if force is not None:  # the load force where the commanded stroke puts the bar, on every grid instant
         bar = position_map(np.mod(grid_t - d, resp.period))
         s_bar = bar.at(z0)
-        f_bar = force(s_bar)
         df_bar = _local_derivative(force, s_bar, _travel(s_bar))
         lag_f = resp.force[np.mod(grid.reshape(-1, 1) - np.arange(n).reshape(1, -1), n)]  # (2 rows, n)
-        x_force0 = lag_f @ f_bar
+        x_force0 = lag_f @ force(s_bar)
         g_force = [(lag_f * df_bar) @ m for m in bar.matrices]
     for phase in range(len(resp.shifts)):
         table = position_map(np.mod(resp.table_times(phase), resp.period))
         p0 = table.at(z0)
         lag_t = resp.shifted(resp.table, grid, phase)
-        e_vals = commanded.at(z0) - lag_t @ p0
-        g_vals = [mc - lag_t @ mt for mc, mt in zip(commanded.matrices, table.matrices)]
+        motion[0].append(combine(commanded.at(z0) - lag_t @ p0))
+        motion[1].append([combine(mc - lag_t @ mt) for mc, mt in zip(commanded.matrices, table.matrices)])
+        e_vals = np.zeros(len(grid))
+        g_vals = [np.zeros((len(grid), m.shape[1])) for m in table.matrices]
         if force is not None:
             e_vals = e_vals - x_force0
             g_vals = [gv - gf for gv, gf in zip(g_vals, g_force)]
@@ -172,8 +174,7 @@ def error_rows(resp: TableResponse, axis: DriveAxis, settings: ServoSettings, in
                 df_table = _local_derivative(force, p0, _travel(p0))
                 e_vals = e_vals - lag_ff @ (-r * force(p0))
                 g_vals = [gv + r * (lag_ff * df_table) @ mt for gv, mt in zip(g_vals, table.matrices)]
-        e0_parts.append(combine(e_vals))
-        g_parts.append([combine(gv) for gv in g_vals])
-    e0 = np.concatenate(e0_parts)
-    g = [np.vstack([part[m] for part in g_parts]) for m in range(len(z0))]
-    return e0, g
+        load[0].append(combine(e_vals))
+        load[1].append([combine(gv) for gv in g_vals])
+    return tuple((np.concatenate(e0), [np.vstack([part[m] for part in g]) for m in range(len(z0))])
+                 for e0, g in (motion, load))
