@@ -37,11 +37,8 @@ def _paths(node, prefix=()):
         yield from _paths(value, prefix + (key,))
 
 
-#: Left unmutated here, as their fields are read unchecked (the linkage package's to fix; the strict xfail
-#: test_a_linkage_field_read_unchecked_is_refused_in_one_line below shows each): [synthesis] (linkage/targets.py
-#: read_spec: fixed_joints, fixed_lengths and fixed_angles of a wrong type or with a key missing give a TypeError,
-#: KeyError or IndexError) and a link's cg_on_line (linkage/files.py _read_link: a ValueError for one joint).
-LOOM_PATHS = sorted((p for p in _paths(LOOM_DATA) if p[0] != "synthesis" and "cg_on_line" not in p), key=repr)
+#: Every field of the file, [synthesis] and a link's cg_on_line included.
+LOOM_PATHS = sorted(_paths(LOOM_DATA), key=repr)
 
 
 @st.composite
@@ -97,9 +94,6 @@ def _sley(d) -> dict:
     return next(link for link in d["transmission"]["links"] if "cg_on_line" in link)
 
 
-@pytest.mark.xfail(strict=True, raises=(TypeError, KeyError, IndexError, ValueError),
-                   reason="the linkage package reads these fields unchecked (LOOM_PATHS above); each case passes once "
-                          "its field is checked, and then the property test above can mutate it too")
 @pytest.mark.parametrize("edit, field", [
     (lambda d: d["synthesis"]["fixed_lengths"][0].update(length_mm="abc"), "synthesis.fixed_lengths"),
     (lambda d: d["synthesis"]["fixed_lengths"][0].pop("joints"), "synthesis.fixed_lengths"),
@@ -110,7 +104,7 @@ def _sley(d) -> dict:
     (lambda d: _sley(d).update(cg_on_line=_sley(d)["cg_on_line"][:1]), "cg_on_line"),
 ], ids=["length a text", "joints missing", "lines a boolean", "angle missing", "fixed joints a boolean",
         "fixed angles a boolean", "cg_on_line of one joint"])
-def test_a_linkage_field_read_unchecked_is_refused_in_one_line(tmp_path, edit, field):
+def test_a_damaged_synthesis_or_cg_field_is_refused_in_one_line(tmp_path, edit, field):
     data = json.loads(json.dumps(LOOM_DATA))
     edit(data)
     path = tmp_path / "damaged.toml"

@@ -179,7 +179,11 @@ def _read_link(lf: Fields, names: list[str], joints: list[Joint], fields: dict) 
     cg = lf.raw("cg_mm", None)
     line = lf.raw("cg_on_line", None)
     if line is not None:   # the centre of gravity at a distance from the first joint towards the second
-        a, b = (next(j for j in joints if j.name == n) for n in _joint_names(lf, "cg_on_line", names))
+        ends = _joint_names(lf, "cg_on_line", names)
+        if len(ends) != 2:
+            raise lf.error("cg_on_line", f"must name two joints (the line from the first towards the second), got "
+                                         f"{len(ends)}")
+        a, b = (next(j for j in joints if j.name == n) for n in ends)
         dist = lf.number("cg_distance_mm", min=0, max=1e5) / 1e3
         if cg is not None:
             raise lf.error("cg_on_line", "give the centre of gravity once (cg_mm or cg_on_line)")

@@ -109,16 +109,40 @@ def poses_only(kin, grid, q, dq) -> Cycle:
                  len(q))
 
 
-def _pairs(f: Fields, key: str, names) -> list:
+def _joints(f: Fields, key: str, names, count: int, value=None) -> tuple:
+    """``count`` joint names of the field ``key`` (an array of known names, none twice; ``value``: a part of the
+    field's value to check in its stead)."""
+    value = f.raw(key) if value is None else value
+    if not (isinstance(value, list) and len(value) == count and all(isinstance(v, str) for v in value)):
+        raise f.error(key, f"must be an array of {count} joint names, got {value!r}")
+    for name in value:
+        if name not in names:
+            raise f.error(key, f"names the unknown joint {name!r}; joints: {', '.join(names)}")
+    if len(set(value)) != count:
+        raise f.error(key, "names a joint twice")
+    return tuple(value)
+
+
+def _fixed_lengths(f: Fields, names) -> list:
+    """``[synthesis] fixed_lengths``: ``[((a, b), length [m])]``."""
     out = []
-    for k, item in enumerate(f.raw(key, [])):
-        where = f"{key}[{k + 1}]"
-        if not isinstance(item, dict):
-            raise f.error(where, "must be an inline table")
-        out.append(item)
-        for line in item.get("joints", []) + [j for ln in item.get("lines", []) for j in ln]:
-            if line not in names:
-                raise f.error(where, f"names the unknown joint {line!r}")
+    for item in f.tables("fixed_lengths", required=False):
+        out.append((_joints(item, "joints", names, 2), item.number("length_mm", min=1e-3, max=1e5) / 1e3))
+        item.finish()
+    return out
+
+
+def _fixed_angles(f: Fields, names) -> list:
+    """``[synthesis] fixed_angles``: ``[((a, b), (c, d), angle [rad])]``, the angle from line a-b to line c-d."""
+    out = []
+    for item in f.tables("fixed_angles", required=False):
+        lines = item.raw("lines")
+        if not (isinstance(lines, list) and len(lines) == 2):
+            raise item.error("lines", f"must be two lines of two joints each ([[\"A\", \"B\"], [\"B\", \"C\"]]), "
+                                      f"got {lines!r}")
+        pair = [_joints(item, "lines", names, 2, ln) for ln in lines]
+        out.append((pair[0], pair[1], math.radians(item.number("angle_deg", min=-360, max=360))))
+        item.finish()
     return out
 
 
@@ -133,13 +157,12 @@ def read_spec(problem, f: Fields) -> SynthesisSpec:
             and all(isinstance(v, (int, float)) for v in angles + speeds)):
         raise f.error("speeds_m_s", "angles_deg and speeds_m_s must be arrays of numbers of one length (3 or more)")
     rms_max = f.number("rms_max_m_s", min=0, max=10)
-    fixed_joints = f.raw("fixed_joints", [])
-    for n in fixed_joints:
-        if n not in names:
-            raise f.error("fixed_joints", f"names the unknown joint {n!r}")
-    lengths = [((d["joints"][0], d["joints"][1]), d["length_mm"] / 1e3) for d in _pairs(f, "fixed_lengths", names)]
-    angles_fixed = [(tuple(d["lines"][0]), tuple(d["lines"][1]), math.radians(d["angle_deg"]))
-                    for d in _pairs(f, "fixed_angles", names)]
+    fixed = f.raw("fixed_joints", [])
+    fixed_joints = _joints(f, "fixed_joints", names, len(fixed)) if isinstance(fixed, list) and fixed else ()
+    if not isinstance(fixed, list):
+        raise f.error("fixed_joints", f"must be an array of joint names, got {fixed!r}")
+    lengths = _fixed_lengths(f, names)
+    angles_fixed = _fixed_angles(f, names)
     spec = SynthesisSpec(
         output, [math.radians(a) for a in angles], np.array(speeds, dtype=float), rms_max, list(fixed_joints),
         lengths, angles_fixed,
