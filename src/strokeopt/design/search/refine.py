@@ -260,27 +260,32 @@ def solve_pinned(req: SolveRequest, mesh, warm) -> _Pinned:
         sols = nlp.unpack(x)
         new = pin_times(nlp.request, nlp.graph.pins, sols)
         error, linear, handover = handover_at(nlp, x, sols)
-        passes += enforce
+        needs = needs_terms(req.objective)  # the terms are the objective (min_handover_error)
+        passes += enforce or needs
         violated = error > settings.accuracy * (1 + (settings.check_tolerance if enforce else 0.0))
-        if violated and needs_terms(req.objective):  # the least error there is: no stroke meets the accuracy
-            raise _accuracy_unreachable(req, nlp, error)
-        # terms linearised about the start: re-solved from the solution while they have not settled there
-        unsettled = abs(error - linear) > settings.check_tolerance * settings.accuracy
-        again = ((violated or (unsettled and needs_terms(req.objective))) and passes < LINEAR_PASSES
-                 and kept is None)  # a solution that held it ends the passes (the load's jumps cycle)
         current = (nlp, sol, x, sols, status, handover, error)
-        if enforce and not violated:
-            kept = current
-        if violated and enforce and not again and kept is not None:  # passes spent: the last that held it
-            nlp, sol, x, sols, status, handover, error = kept
+        # terms linearised about the start: re-solved from the solution while they have not settled there
+        if needs:  # the most accurate stroke: the least exact error of the passes
+            kept = current if kept is None or error < kept[-1] else kept
+            again = abs(error - linear) > settings.check_tolerance * settings.accuracy and passes < LINEAR_PASSES
+        else:  # a held accuracy: until a solution holds it exactly (the load's jumps would cycle on)
+            again = violated and passes < LINEAR_PASSES and kept is None
+            kept = current if enforce and not violated else kept
+        if not again and kept is not None and kept is not current and (needs or (violated and enforce)):
+            nlp, sol, x, sols, status, handover, error = kept  # passes spent: the best, or the last that held it
+            violated = needs and error > settings.accuracy
             break
-        if not (violated and not enforce) and not again and pins_in_place(nlp, x, new):
+        if violated and needs and not again:  # the least error there is: no stroke meets the accuracy
+            raise _accuracy_unreachable(req, nlp, error)
+        if not (violated and not enforce and not needs) and not again and pins_in_place(nlp, x, new):
             break
         held = current if not violated else None
-        pins, warm, enforce = new, sols, enforce or violated
+        pins, warm, enforce = new, sols, enforce or (violated and not needs)
     else:
-        if violated and kept is not None:  # the pins' re-solves ended on a solution that breaks the accuracy
+        if (violated or needs) and kept is not None:  # the pins' re-solves ended on a worse solution
             nlp, sol, x, sols, status, handover, error = kept
+    if needs and error > settings.accuracy:
+        raise _accuracy_unreachable(req, nlp, error)
     return _Pinned(nlp, sol, x, sols, status, handover, error, total_time, iterations)
 
 
