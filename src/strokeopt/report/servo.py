@@ -29,16 +29,11 @@ def accuracy_text(report: dict) -> str:
     if used:
         lines.append(drive_text(used))
     if used and used["from"].startswith("the design file"):
-        lines += [
-            # The design solve checks the bar error at the end of the handover move only, for a continuous
-            # reference (the error as a linear functional of the stroke's acceleration). This report simulates
-            # the full loop: the position table sampled (worst of several table phases), the largest error
-            # over the whole handover window after the move, plus one encoder count. It is therefore the
-            # larger of the two, by the window's belt ringing and the sampling.
-            "  note: the design solve checks the error at the end of the handover move with a continuous "
-            "reference; below is the full loop (sampled table, largest error over the handover window, plus one "
-            "encoder count), so it can be larger",
-        ]
+        # The design's handover term is this simulation's error as a linear functional of the stroke (the
+        # sampled table, the window's instants, the load forces linearised about the solve's start: servo/
+        # table_term.py); here the loop is simulated in full, so the two agree to the linearisation's error.
+        lines.append("  note: the design's handover term is this simulation's error, linear in the stroke (the load "
+                     "forces linearised about the solve's start); below is the full simulation of the loop")
     lines += [
         f"{report['problem']} at {report['spm']:g} spm, {report['label']}: motor {report['motor']}, "
         f"pulley PD {report['pulley_pitch_diameter_mm']:.2f} mm, moving mass {report['moving_mass_kg']:g} kg",
