@@ -130,6 +130,13 @@ def _travel(s: np.ndarray) -> np.ndarray:
     return 0.5 * np.abs(np.roll(s, -1) - np.roll(s, 1))
 
 
+def _product(left: np.ndarray, positions: np.ndarray) -> np.ndarray:
+    """``left @ positions`` over the rows of ``positions`` that are not zero (a move's instants: the dwells'
+    positions are constants, most of the cycle)."""
+    rows = np.flatnonzero(np.any(positions != 0.0, axis=1))
+    return left[:, rows] @ positions[rows]
+
+
 def error_rows(resp: TableResponse, axis: DriveAxis, settings: ServoSettings, instants: np.ndarray,
                position_map, z0: list) -> tuple[tuple[np.ndarray, list], tuple[np.ndarray, list]]:
     """The bar error at ``instants`` (rows: ``(j, w)`` = the error ``(1 - w) e[j] + w e[j + 1]`` at grid
@@ -157,13 +164,13 @@ def error_rows(resp: TableResponse, axis: DriveAxis, settings: ServoSettings, in
         df_bar = _local_derivative(force, s_bar, _travel(s_bar))
         lag_f = resp.force[np.mod(grid.reshape(-1, 1) - np.arange(n).reshape(1, -1), n)]  # (2 rows, n)
         x_force0 = lag_f @ force(s_bar)
-        g_force = [(lag_f * df_bar) @ m for m in bar.matrices]
+        g_force = [_product(lag_f * df_bar, m) for m in bar.matrices]
     for phase in range(len(resp.shifts)):
         table = position_map(np.mod(resp.table_times(phase), resp.period))
         p0 = table.at(z0)
         lag_t = resp.shifted(resp.table, grid, phase)
         motion[0].append(combine(commanded.at(z0) - lag_t @ p0))
-        motion[1].append([combine(mc - lag_t @ mt) for mc, mt in zip(commanded.matrices, table.matrices)])
+        motion[1].append([combine(mc - _product(lag_t, mt)) for mc, mt in zip(commanded.matrices, table.matrices)])
         e_vals = np.zeros(len(grid))
         g_vals = [np.zeros((len(grid), m.shape[1])) for m in table.matrices]
         if force is not None:
@@ -173,7 +180,7 @@ def error_rows(resp: TableResponse, axis: DriveAxis, settings: ServoSettings, in
                 lag_ff = resp.shifted(resp.feedforward, grid, phase)
                 df_table = _local_derivative(force, p0, _travel(p0))
                 e_vals = e_vals - lag_ff @ (-r * force(p0))
-                g_vals = [gv + r * (lag_ff * df_table) @ mt for gv, mt in zip(g_vals, table.matrices)]
+                g_vals = [gv + r * _product(lag_ff * df_table, mt) for gv, mt in zip(g_vals, table.matrices)]
         load[0].append(combine(e_vals))
         load[1].append([combine(gv) for gv in g_vals])
     return tuple((np.concatenate(e0), [np.vstack([part[m] for part in g]) for m in range(len(z0))])
