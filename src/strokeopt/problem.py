@@ -24,6 +24,7 @@ from .design.transcription.settings import parse_design
 from .drive.spec import parse_drive
 from .drive.transmission import PROFILE_PITCH, TEETH_RANGE, BeltPulley, Gearbox, ScrewLever, Transmission
 from .errors import ProblemError
+from .io.cycle import CYCLE_NOUN, STITCH, MachineCycle
 from .io.fields import _REQUIRED, Fields, apply_overrides
 from .motion.laws import LAW_NAMES, LAW_PARAMETERS, MotionLaw, make_law
 from .motion.timing import INTERVAL_TIMES, SPM_RANGE, Interval, TimingDiagram
@@ -61,6 +62,8 @@ class Problem:
     #: the terms of the handover position error the design holds (design.request.ErrorTerm; the
     #: problem file gives the servo's term with a [servo] section)
     error_terms: tuple = field(default=(), repr=False)
+    #: [machine] cycle: what one cycle of the machine is called ("stitch", "pick") and its rate's unit
+    cycle: MachineCycle = field(default=STITCH)
 
     @property
     def pulley_teeth(self) -> int | None:
@@ -109,6 +112,10 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
     spm = machine.number("spm", min=SPM_RANGE[0], max=SPM_RANGE[1])  # problem.SPM_RANGE says why
     # a cam revolution per 100 stitches to 100 revolutions per stitch: gears and indexing drives, not beyond
     revs = machine.number("cam_revolutions_per_stitch", 1.0, min=0.01, max=100.0)
+    noun = machine.string("cycle", STITCH.noun)  # what one cycle of the machine is: "stitch", "pick"
+    if not (len(noun) <= 24 and CYCLE_NOUN.fullmatch(noun)):
+        raise machine.error("cycle", f"{noun!r} is not a cycle noun: one to three lower-case words of letters "
+                                     f"(\"stitch\", \"pick\", \"test cycle\"), at most 24 characters")
     machine.finish()
 
     motion = top.table("motion")
@@ -147,6 +154,7 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
         name=name,
         description=description,
         spm=spm,
+        cycle=MachineCycle(noun),
         timing=timing,
         default_law=default_law,
         transmission=transmission,

@@ -82,9 +82,13 @@ def cmd_size(args) -> int:
                         find_max_spm=args.max_spm, progress=progress, stroke=args.design_stroke)
     feasible = any(c.feasible for c in sizing.candidates)
     report = {"status": "ok" if feasible else "infeasible", **sizing.to_dict(explain=args.explain),
+              "cycle": problem.cycle.noun,  # the machine's cycle: stitch, pick (io/cycle.py)
               "drive": {"motors": args.motor or "every catalogue motor",
                         "pulley_teeth": args.pulley_teeth or "the problem's pulley_teeth_min..max",
                         "from": args.drive_from}}
+    if not hasattr(problem.transmission, "radius"):  # no pulley to choose: the problem's transmission
+        report["drive"]["pulley_teeth"] = None
+        report["drive"]["transmission"] = problem.transmission.name
     report["verdict"] = sizing_verdict(sizing)
     if args.continuous_radius:
         spec = problem.drive

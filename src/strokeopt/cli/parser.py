@@ -42,7 +42,8 @@ def _drive_options(p: argparse.ArgumentParser, design: str, repeatable: bool = F
 
 def _stroke_options(p: argparse.ArgumentParser, sweep: bool = False, law: bool = True) -> None:
     """--spm (and a START:STOP:STEP sweep where the command has one), --law, --chi."""
-    p.add_argument("--spm", help="stitches per minute" + (", or a sweep START:STOP:STEP" if sweep else "")
+    p.add_argument("--spm", help="cycles per minute of the machine's cycle ([machine] cycle: stitches, picks)"
+                   + (", or a sweep START:STOP:STEP" if sweep else "")
                    + " (default: machine.spm of the file)")
     if law:
         p.add_argument("--law", help="use this motion law for every move (see 'strokeopt laws')")

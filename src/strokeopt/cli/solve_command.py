@@ -26,8 +26,10 @@ def solve_once(args, problem, progress=None, scenes=None):
     design = verified.design
     chosen = drive_used(args, problem, design.motor, design.pulley_teeth)
     if problem.design is not None and (problem.design.motor_choice != "fixed" or problem.design.pulley != "fixed"):
-        chosen["from"] = (f"the solve's choice: design.motor_choice = {problem.design.motor_choice}, design.pulley "
-                          f"= {problem.design.pulley}")
+        pulley = (f"design.pulley = {problem.design.pulley}" if hasattr(problem.transmission, "radius") else
+                  f"the problem's {problem.transmission.name}" + (f" of ratio {problem.transmission.ratio:g}"
+                                                                  if hasattr(problem.transmission, "ratio") else ""))
+        chosen["from"] = f"the solve's choice: design.motor_choice = {problem.design.motor_choice}, {pulley}"
     return verified, chosen
 
 
@@ -114,20 +116,21 @@ def _sweep(args, problem, sweep: list, progress) -> int:
                        "objective": args.objective or (problem.design.objective if problem.design else None),
                        "rows": rows, "fastest_feasible_spm": best, "fastest_feasible_is_sweep_end": at_end}))
     else:
-        print(format_table(rows, [("spm", "spm"), ("feasible", "feasible"), ("objective_value", "objective"),
+        cycle = problem.cycle  # the machine's cycle: stitch, pick (io/cycle.py)
+        print(format_table(rows, [("spm", cycle.rate_unit), ("feasible", "feasible"), ("objective_value", "objective"),
                                   ("motor", "motor"), ("pulley_teeth", "z"), ("peak_torque_N_m", "peak N m"),
                                   ("rms_torque_N_m", "RMS N m"), ("solve_time_s", "solve time s"),
                                   ("reason", "why not")],
-                           title=f"{problem.name}: optimal design over the stitch rate ({_chained(runner)})"))
-        print("\nno feasible stitch rate in the sweep" if best is None else
-              f"\nfastest feasible stitch rate: >= {best:g} spm (the end of the sweep; every rate was feasible)"
-              if at_end else f"\nfastest feasible stitch rate: {best:g} spm")
-    _write_figure(lambda p: plot_design_sweep(rows, p, _objective(args, problem)),
+                           title=f"{problem.name}: optimal design over the {cycle.rate_name} ({_chained(runner)})"))
+        print(f"\nno feasible {cycle.rate_name} in the sweep" if best is None else
+              f"\nfastest feasible {cycle.rate_name}: >= {cycle.rate(best)} (the end of the sweep; every rate was "
+              "feasible)" if at_end else f"\nfastest feasible {cycle.rate_name}: {cycle.rate(best)}")
+    _write_figure(lambda p: plot_design_sweep(rows, p, _objective(args, problem), problem.cycle),
                   _plot_path(args, "solve_sweep", spm_tag(sweep), _objective(args, problem)), args)
     if _report_failed_tasks(rows, "spm", "spm"):
         return 1
     if best is None:
-        print("strokeopt: infeasible: no stitch rate of the sweep meets every limit (column 'why not')",
+        print(f"strokeopt: infeasible: no {problem.cycle.rate_name} of the sweep meets every limit (column 'why not')",
               file=sys.stderr)
         return 1
     return 0

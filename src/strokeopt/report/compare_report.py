@@ -183,10 +183,11 @@ def compare_report(datas: list[ReportData]) -> str:
     names = _names(datas)
     S = [d.summary for d in datas]
     machine = datas[0].machine
+    cycle = datas[0].problem.cycle  # the machine's cycle: stitch, pick (io/cycle.py)
     heads = dict(sections_for(machine))
     built: dict = {}
     rows = [_row("problem", [s["problem"] for s in S], None), _row("objective", [s["objective"] for s in S], "objective"),
-            _row("status", [s["status"] for s in S], "status"), _row("stitch rate [spm]", [s["spm"] for s in S], "spm"),
+            _row("status", [s["status"] for s in S], "status"), _row(f"{cycle.rate_name} [{cycle.rate_unit}]", [s["spm"] for s in S], "spm"),
             _row("cam cycle [s]", [s["cycle_time_s"] for s in S], "cycle_time_s"),
             _row("drive", [drive_text(d.machine, s) for d, s in zip(datas, S)], None),
             _row("--set", ["; ".join(getattr(d.problem, "overrides", ())) or "none" for d in datas], None)]
@@ -239,7 +240,7 @@ def compare_report(datas: list[ReportData]) -> str:
     built["inputs"] = _table(names, rows)
     sections = [(sid, heads[sid], built[sid]) for sid in heads]
     title = f"{S[0]['problem']}: {len(datas)} designs compared"
-    sub = " | ".join(f"{n}: {s['objective']}, {drive_text(d.machine, s)}, {s['spm']:g} spm"
+    sub = " | ".join(f"{n}: {s['objective']}, {drive_text(d.machine, s)}, {d.problem.cycle.rate(s['spm'])}"
                      for n, s, d in zip(names, S, datas)) + (" (green: the better value of a row, where the values "
                                                              "differ as printed and no bound is active)")
     return h.page(title, sub, sections)

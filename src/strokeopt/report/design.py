@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 from ..drive.checks import torque_limit_text
+from ..io.cycle import STITCH, cycle_of
 from ..io.load_units import load_key
 from .format import format_table, format_value, period_text
 from ..design.result import Design, design_summary, move_direction  # noqa: F401 (design_summary: read from here too)
@@ -59,7 +60,7 @@ def plot_design(design: Design, law_stroke=None, path=None):
         ax.tick_params(labelbottom=False)
     strokes = [design.stroke] + ([law_stroke] if law_stroke is not None else [])
     draw_kinematics(axes, design.problem, strokes, design.spm)
-    axes[0].set_title(f"{' vs '.join(s.label for s in strokes)}; {period_text(design.stroke.period, design.spm)}",
+    axes[0].set_title(f"{' vs '.join(s.label for s in strokes)}; {period_text(design.stroke.period, design.spm, design)}",
                       fontsize=9)
     from .machine import machine_of
 
@@ -67,7 +68,7 @@ def plot_design(design: Design, law_stroke=None, path=None):
     drive = (f", motor {design.motor}, pulley {_pulley_text(design)}" if design.pitch_diameter is not None
              else f", {machine.drive_words} on the {machine.transmission}")
     what = f"{design.objective}" + (drive if design.motor else "")
-    fig.suptitle(f"{design.problem.name}: optimal stroke ({what}) at {design.spm:g} spm", fontsize=11)
+    fig.suptitle(f"{design.problem.name}: optimal stroke ({what}) at {cycle_of(design).rate(design.spm)}", fontsize=11)
     if path_torque:
         t, terms = path_torque
         limits = design.problem.drive.limits
@@ -83,8 +84,9 @@ def plot_design(design: Design, law_stroke=None, path=None):
     return fig
 
 
-def plot_design_sweep(rows: list[dict], path=None, objective: str | None = None):
-    """Optimal objective (and peak torque) over the stitch rate of a design sweep; infeasible rates marked."""
+def plot_design_sweep(rows: list[dict], path=None, objective: str | None = None, cycle=STITCH):
+    """Optimal objective (and peak torque) over the machine's rate of a design sweep; infeasible rates marked
+    (``cycle``: the machine's cycle, io/cycle.py)."""
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(8, 4), constrained_layout=True)
@@ -96,12 +98,13 @@ def plot_design_sweep(rows: list[dict], path=None, objective: str | None = None)
             ax.plot([r["spm"] for r in ok], [r["peak_torque_N_m"] for r in ok], "s--", label="peak torque [N m]")
     for r in bad:
         ax.axvline(r["spm"], color="tab:red", alpha=0.4, lw=1)
-    ax.set_xlabel("stitch rate [spm]")
+    cycle = cycle_of(cycle)
+    ax.set_xlabel(f"{cycle.rate_name} [{cycle.rate_unit}]")
     ax.set_ylabel("objective")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     motors = ", ".join(dict.fromkeys(str(r["motor"]) for r in ok if r.get("motor"))) or "-"
-    ax.set_title(f"optimal design ({objective or 'objective'}; motor {motors}) over the stitch rate "
+    ax.set_title(f"optimal design ({objective or 'objective'}; motor {motors}) over the {cycle.rate_name} "
                  "(red: infeasible)", fontsize=10)
     if path is not None:
         from .figures import fit_titles
@@ -126,16 +129,27 @@ def _pulley_text(design: Design) -> str:
             else "continuous radius (design.pulley = \"continuous\": no catalogue tooth count)")
 
 
+def _machine_words(design: Design) -> str:
+    from .machine import machine_of
+
+    return machine_of(design.problem).transmission
+
+
 def design_text(design: Design, comparison: list[dict] | None = None) -> str:
     """A readable account of a design: choices, objective, moves, checks with margins, active constraints."""
-    lines = [f"{design.problem.name}: optimal stroke at {design.spm:g} spm "
-             f"({period_text(design.stroke.period, design.spm)}; {design.status}, "
+    lines = [f"{design.problem.name}: optimal stroke at {cycle_of(design).rate(design.spm)} "
+             f"({period_text(design.stroke.period, design.spm, design)}; {design.status}, "
              f"solved in {design.solve_time_s:.2f} s, mesh {design.mesh.intervals} x degree {design.mesh.degree})",
              f"objective {design.objective}: {format_value(design.objective_value)} {design.objective_unit}"]
     if design.motor is not None:
         kind = " (stepper)" if getattr(design.motor_spec, "kind", "servo") == "stepper" else ""
-        lines.append(f"motor {design.motor}{kind}; pulley {_pulley_text(design)}" + (
-            "" if design.pitch_diameter is None else f", pitch diameter {design.pitch_diameter * 1e3:.2f} mm"))
+        if design.pitch_diameter is None:  # the problem's own transmission: a gearbox, a screw and lever
+            tr = design.problem.transmission
+            ratio = f" of ratio {tr.ratio:g}" if hasattr(tr, "ratio") else ""
+            lines.append(f"motor {design.motor}{kind}; the problem's {_machine_words(design)}{ratio}")
+        else:
+            lines.append(f"motor {design.motor}{kind}; pulley {_pulley_text(design)}, "
+                         f"pitch diameter {design.pitch_diameter * 1e3:.2f} mm")
     lines.append("")
     from .units import is_rotary, load_columns, load_label, with_load_stroke
 

@@ -24,7 +24,7 @@ from . import html as h
 from .figures import PRINT_WIDTH_IN, legend_outside
 from .format import format_value, period_text
 from .machine import ELASTIC_CHAIN, NEEDLE_BAR, Machine, drive_text, machine_of
-from .units import is_rotary, load_label
+from .units import direction_word, is_rotary, load_label
 from ..io.load_units import load_key, to_load_units
 from .verification_section import section_verification
 
@@ -129,7 +129,7 @@ def plot_timing(problem, stroke, spm: float):
     ax.set_xlim(0, 360)
     ax.set_xticks(np.arange(0, 361, 45))
     ax.set_xlabel("cam angle [deg] (numbers: the intervals of the table)")
-    ax.set_ylabel(frame_label(f"{output} position", unit))
+    ax.set_ylabel(frame_label(f"{output} position", unit, is_rotary(problem)))
     ms = stroke.period * 1e3 / 360.0
     sec = ax.secondary_xaxis("top", functions=(lambda a: a * ms, lambda t: t / ms))
     sec.set_xlabel("time [ms]")
@@ -201,13 +201,14 @@ def plot_drive(design):
 def _interval_rows(problem, spm: float) -> list[list[str]]:
     sch = problem.timing.schedule(spm)
     scale, _ = _position_scale(problem)
+    rotary = is_rotary(problem)  # a sley turns: its moves are positive or negative, not up or down
     rows = []
     for itv, a0, a1, t0, dur in zip(problem.timing.intervals, sch.start_angle_deg, sch.end_angle_deg,
                                     sch.t_start, sch.duration):
         rows.append([h.cell(itv.index), h.cell(itv.name), h.cell("move" if itv.is_move else "dwell"),
                      h.cell(itv.law.label if itv.is_move else "-"),
                      h.cell(abs(itv.stroke) * scale if itv.is_move else None),
-                     h.cell(("up" if itv.stroke > 0 else "down") if itv.is_move else "-"),
+                     h.cell(direction_word("up" if itv.stroke > 0 else "down", rotary) if itv.is_move else "-"),
                      h.cell(a0), h.cell(a1), h.cell(t0 * 1e3), h.cell((t0 + dur) * 1e3),
                      h.cell(itv.start_position * scale), h.cell("handover" if itv.handover else "")])
     return rows
@@ -226,7 +227,8 @@ def _transmission_facts(d: ReportData, m: Machine) -> list[tuple]:
                 ("pulley pitch diameter [mm]", s.get("pulley_pitch_diameter_mm"), "pulley_pitch_diameter_mm")]
     rows = [("transmission", m.transmission, None)]
     for label, attr, scale in (("screw lead [mm]", "lead", 1e3), ("lever arm at the nut [mm]", "R0", 1e3),
-                               ("lever arm at the sleeve [mm]", "R0P", 1e3)):
+                               ("lever arm at the sleeve [mm]", "R0P", 1e3),
+                               ("gear ratio [motor turns per output turn]", "ratio", 1.0)):
         if getattr(tr, attr, None) is not None:
             rows.append((label, getattr(tr, attr) * scale, None))
     return rows
@@ -237,7 +239,7 @@ def section_problem(d: ReportData) -> str:
     facts = [("problem", p.name, "problem"), ("objective", s["objective"], "objective"),
              (f"objective value [{s['objective_unit']}]", s["objective_value"], "objective_value"),
              ("status", s["status"], "status"), ("verdict", s.get("verdict"), None),
-             ("stitch rate [spm]", s["spm"], "spm"), ("cam cycle [s]", s["cycle_time_s"], "cycle_time_s"),
+             (f"{p.cycle.rate_name} [{p.cycle.rate_unit}]", s["spm"], "spm"), ("cam cycle [s]", s["cycle_time_s"], "cycle_time_s"),
              ("motor", s["motor"], "motor"),
              ("motor kind", ("stepper (pull-out curve, step rate)" if m.stepper else "servo (peak and rated curves)")
               if m.motor else None, None)]
@@ -255,13 +257,14 @@ def section_problem(d: ReportData) -> str:
     sch = p.timing.schedule(s["spm"])
     moves = [i for i in p.timing.intervals if i.is_move]
     what = (f"{len(moves)} move{'s' if len(moves) != 1 else ''} of "
-            + ", ".join(f"{abs(i.stroke) * scale:g} {unit} {'up' if i.stroke > 0 else 'down'}" for i in moves))
+            + ", ".join(f"{abs(i.stroke) * scale:g} {unit} "
+               f"{direction_word('up' if i.stroke > 0 else 'down', is_rotary(p))}" for i in moves))
     handover = p.timing.handover_move
     hand = (f"; the handover (dashed) ends move {handover.move_index} at {sch.end_angle_deg[handover.index - 1]:.1f} deg"
             if handover is not None else "; the machine has no handover")
     caption = (f"Position of the {m.output} over one cam cycle of {s['cycle_time_s'] * 1e3:.1f} ms: {what}; "
                f"dwells shaded{hand}; top axis: time.")
-    return (h.para(f"{p.description} Design {d.source}; {period_text(s['cycle_time_s'], s['spm'])}.")
+    return (h.para(f"{p.description} Design {d.source}; {period_text(s['cycle_time_s'], s['spm'], p)}.")
             + h.key_table(facts) + h.heading("Timing diagram (cam degrees and time)")
             + h.table(head, _interval_rows(p, s["spm"]))
             + h.svg_figure(plot_timing(p, d.design.stroke, s["spm"]), caption))
@@ -291,7 +294,7 @@ def section_stroke(d: ReportData) -> str:
     rotary = is_rotary(d.problem)   # a rotary load: deg, rad/s, rad/s2, rad/s3 (io/load_units.py)
     keys = [load_key(k, rotary) for k in ("stroke_mm", "v_max_m_s", "a_max_m_s2", "jerk_max_m_s3")]
     moves = [[h.cell(mv["index"], f"moves[{i}].index"), h.cell(mv[keys[0]], f"moves[{i}].{keys[0]}"),
-              h.cell(mv["direction"]), h.cell(mv["duration_s"] * 1e3),
+              h.cell(direction_word(mv["direction"], rotary)), h.cell(mv["duration_s"] * 1e3),
               *(h.cell(mv[k], f"moves[{i}].{k}") for k in keys[1:]), h.cell(mv["C_a"], f"moves[{i}].C_a")]
              for i, mv in enumerate(s["moves"])]
     law = d.problem.stroke(s["spm"])
@@ -463,7 +466,7 @@ def design_report(d: ReportData) -> str:
     s = d.summary
     m = d.machine
     sections = [(sid, head, builders[sid](d)) for sid, head in sections_for(m)]
-    title = f"{d.problem.name}: {s['objective']} design at {s['spm']:g} spm"
+    title = f"{d.problem.name}: {s['objective']} design at {d.problem.cycle.rate(s['spm'])}"
     sub = (f"{drive_text(m, s)}; status {s['status']}; "
            f"strokeopt {d.versions.get('strokeopt', '')}, {d.created}")
     return h.page(title, sub, sections)

@@ -13,7 +13,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from ..drive.checks import cycle_values, torque_limit
+from ..io.cycle import cycle_of
 from .format import format_table, period_text
+from .units import direction_word
 
 
 def sizing_verdict(sizing) -> str:
@@ -54,7 +56,7 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
     if inp.get("load_unit") == "rad":  # a rotary load (report/units.py): inertia, torques, angles
         forces = "; ".join(f"{f['name']} ({f['kind']}, {f['force_N']:g} N m + {f['stiffness_N_m']:g} N m/rad "
                            f"beyond {math.degrees(f['contact_position_mm'] * 1e-3):g} deg, pushing "
-                           f"{f['direction']})" for f in inp["load_forces"]) or "none"
+                           f"towards {direction_word(f['direction'], True)} angles)" for f in inp["load_forces"]) or "none"
         load = f"load: moving inertia {inp['moving_mass_kg']:g} kg m^2 (rotary, gravity off), load torques: {forces}"
     else:
         forces = "; ".join(f"{f['name']} ({f['kind']}, {f['force_N']:g} N + {f['stiffness_N_m']:g} N/m "
@@ -63,7 +65,8 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
         load = (f"load: moving mass {inp['moving_mass_kg']:g} kg, gravity {inp['gravity_m_s2']:g} m/s^2 along the "
                 f"axis, load forces: {forces}")
     lines = [
-        f"{report['problem']} at {report['spm']:g} spm ({period_text(report['cycle_time_s'], report['spm'])}, "
+        f"{report['problem']} at {cycle_of(report).rate(report['spm'])} "
+        f"({period_text(report['cycle_time_s'], report['spm'], report)}, "
         f"{inp['law']}, {inp['samples']} samples over the whole cycle)",
         load,
         f"limits: torque limit = min(motor peak, drive peak limit {inp['peak_limit_pct']:g} % x rated torque) "
@@ -77,7 +80,9 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
     if "drive" in report:
         d = report["drive"]
         names = lambda v: ", ".join(map(str, v)) if isinstance(v, list) else v  # noqa: E731
-        lines.insert(3, f"drive: motors {names(d['motors'])}; pulleys {names(d['pulley_teeth'])} (from {d['from']})")
+        what = (f"pulleys {names(d['pulley_teeth'])}" if d.get("transmission") is None
+                else f"the problem's {d['transmission']}")
+        lines.insert(3, f"drive: motors {names(d['motors'])}; {what} (from {d['from']})")
     cols = [("motor", "motor"), ("pulley_teeth", "z"), ("pulley_pitch_diameter_mm", "PD mm"),
             ("peak_torque_N_m", "peak N m"), ("torque_limit_N_m", "limit N m"), ("rms_torque_N_m", "RMS N m"),
             ("overload_pct", "overload %"),
@@ -230,7 +235,8 @@ def stepper_text(sizing, report: dict, explain: bool = False) -> str:
     units = {name: "kg" if unit == "m" else "kg m^2" for name, _, unit in
              c0.pulley.transmission().stages(ca.SX.sym("phi"))}
     lines = [
-        f"{report['problem']} at {report['spm']:g} spm ({period_text(report['cycle_time_s'], report['spm'])}, "
+        f"{report['problem']} at {cycle_of(report).rate(report['spm'])} "
+        f"({period_text(report['cycle_time_s'], report['spm'], report)}, "
         f"{inp['law']}, {inp['samples']} samples over the whole cycle)",
         f"load: {inp['moving_mass_kg']:g} kg at the load, gravity {inp['gravity_m_s2']:g} m/s^2; members: "
         + ("; ".join(f"{m.name} ({m.inertia:g} {units[m.stage]} on the {m.stage})" for m in sizing.load.members)

@@ -13,9 +13,10 @@ from __future__ import annotations
 PROBLEM_FRAME = "problem frame, + up"
 
 
-def frame_label(quantity: str, unit: str) -> str:
-    """An axis label of a position or velocity in the problem's coordinates: 'position [mm]\\n(problem frame, + up)'."""
-    return f"{quantity} [{unit}]\n({PROBLEM_FRAME})"
+def frame_label(quantity: str, unit: str, rotary: bool = False) -> str:
+    """An axis label of a position or velocity in the problem's coordinates: 'position [mm]\\n(problem frame, + up)';
+    a rotary load's (a sley's, ``rotary``): '+ positive angle'."""
+    return f"{quantity} [{unit}]\n({'problem frame, + positive angle' if rotary else PROBLEM_FRAME})"
 
 
 def shade_dwells(ax, timing, spm) -> None:

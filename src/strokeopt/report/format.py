@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from ..io.cycle import STITCH, cycle_of
 from ..io.plain import format_value, to_json  # noqa: F401  (report's names for them)
 
 
@@ -55,15 +56,16 @@ def format_table(rows: list[dict], columns: list[tuple[str, str]], title: str = 
 def drive_text(drive: dict) -> str:
     """The line every report has: which motor and pulley it used and where they come from."""
     teeth = drive.get("pulley_teeth")
-    names = {"screw_lever": "screw and lever", "belt_pulley": "belt pulley"}  # the transmission in words
+    names = {"screw_lever": "screw and lever", "belt_pulley": "belt pulley", "gearbox": "gearbox"}  # in words
     pulley = f"pulley {teeth} teeth" if teeth is not None else \
         names.get(drive.get("transmission"), drive.get("transmission")) or "continuous pulley radius"
     return f"drive: motor {drive.get('motor') or '(none)'}, {pulley} (from {drive['from']})"
 
 
-def period_text(cycle_s: float, spm: float) -> str:
-    """The cam cycle and the stitch period, both named: 'cam cycle 200.0 ms = 2 stitches of 100.0 ms'."""
+def period_text(cycle_s: float, spm: float, cycle=STITCH) -> str:
+    """The cam cycle and the machine's cycle, both named: 'cam cycle 200.0 ms = 2 stitches of 100.0 ms'
+    (``cycle``: the machine's cycle, io/cycle.py, or what has one: a problem, a design, a summary)."""
     stitch_s = 60.0 / spm
     stitches = cycle_s / stitch_s
     count = f"{round(stitches)}" if abs(stitches - round(stitches)) < 1e-9 else f"{stitches:.4g}"
-    return f"cam cycle {cycle_s * 1e3:.1f} ms = {count} stitch{'' if count == '1' else 'es'} of {stitch_s * 1e3:.1f} ms"
+    return f"cam cycle {cycle_s * 1e3:.1f} ms = {cycle_of(cycle).count(count)} of {stitch_s * 1e3:.1f} ms"

@@ -9,6 +9,7 @@ import casadi as ca
 import matplotlib.pyplot as plt
 import numpy as np
 
+from ..io.cycle import cycle_of
 from ..motion.stroke import StrokeFunction
 from .figures import frame_label, shade_dwells
 from .format import format_table, period_text
@@ -51,6 +52,7 @@ def kinematics_summary(problem, stroke: StrokeFunction, spm: float, step_angle: 
     return {
         "problem": problem.name,
         "spm": spm,
+        "cycle": problem.cycle.noun,  # the machine's cycle: "stitch", "pick" (io/cycle.py)
         "cycle_time_s": sch.period,  # the cam cycle: 1 / cam_revolutions_per_stitch stitches
         "stitch_period_s": 60.0 / spm,
         "interval_times": problem.timing.interval_times,
@@ -100,7 +102,8 @@ def _member_summary(problem, stroke: StrokeFunction, spm: float, step_angle: flo
         intervals.append(row)
         if itv.is_move:
             moves.append({"index": itv.move_index, "interval": itv.index, **{k: v for k, v in row.items() if k != "index"}})
-    return {"problem": problem.name, "spm": spm, "cycle_time_s": sch.period, "stitch_period_s": 60.0 / spm,
+    return {"problem": problem.name, "spm": spm, "cycle": problem.cycle.noun, "cycle_time_s": sch.period,
+            "stitch_period_s": 60.0 / spm,
             "interval_times": problem.timing.interval_times,
             "law": problem.default_law.name if len({m.law for m in problem.timing.moves}) == 1 else "mixed",
             "law_params": problem.default_law.params, "transmission": problem.transmission.name,
@@ -125,7 +128,8 @@ KINEMATICS_COLUMNS = [
 def kinematics_text(summary: dict) -> str:
     if "members" in summary["intervals"][0]:
         return _member_text(summary)
-    head = (f"{summary['problem']} at {summary['spm']:g} spm ({period_text(summary['cycle_time_s'], summary['spm'])}, "
+    head = (f"{summary['problem']} at {cycle_of(summary).rate(summary['spm'])} "
+            f"({period_text(summary['cycle_time_s'], summary['spm'], summary)}, "
             f"interval times {summary['interval_times']}), pulley {summary['pulley_teeth']} teeth, "
             f"PD {summary['pulley_pitch_diameter_mm']:.2f} mm")
     laws = sorted({m["law"] for m in summary["moves"]})
@@ -135,7 +139,8 @@ def kinematics_text(summary: dict) -> str:
 
 
 def _member_text(summary: dict) -> str:
-    head = (f"{summary['problem']} at {summary['spm']:g} spm ({period_text(summary['cycle_time_s'], summary['spm'])}, "
+    head = (f"{summary['problem']} at {cycle_of(summary).rate(summary['spm'])} "
+            f"({period_text(summary['cycle_time_s'], summary['spm'], summary)}, "
             f"interval times {summary['interval_times']}), transmission {summary['transmission']}")
     head += "\nmotion law: " + ", ".join(sorted({m["law"] for m in summary["moves"]}))
     from .units import load_columns, with_load_stroke
@@ -195,7 +200,7 @@ def draw_kinematics(axes, problem, strokes, spm: float, n: int = 3601) -> None:
     output = machine_of(problem).output  # what the stroke moves: the bar, the cam
     for ax, (name, unit, _) in zip(axes, units):
         shade_dwells(ax, problem.timing, spm)
-        ax.set_ylabel(frame_label(f"{output} {name}", unit))
+        ax.set_ylabel(frame_label(f"{output} {name}", unit, problem.timing.rotary))
         ax.grid(True, alpha=0.3)
         ax.axhline(0, color="0.5", lw=0.6)
     move = problem.timing.handover_move
@@ -210,7 +215,8 @@ def draw_kinematics(axes, problem, strokes, spm: float, n: int = 3601) -> None:
     axes[-1].set_xlim(0, 360)
     axes[-1].set_xticks(np.arange(0, 361, 30))
     has_dwell = any(not i.is_move for i in problem.timing.intervals)
-    axes[0].set_title(f"{problem.name}: {stroke_names(strokes)} at {spm:g} spm ({period_text(problem.timing.period(spm), spm)})"
+    axes[0].set_title(f"{problem.name}: {stroke_names(strokes)} at {problem.cycle.rate(spm)} "
+                      f"({period_text(problem.timing.period(spm), spm, problem)})"
                       + (", dwells shaded" if has_dwell else ""), fontsize=10)
     if len(strokes) > 1:
         from .figures import legend_outside

@@ -32,8 +32,21 @@ def load_columns(cols: list[tuple[str, str]], rotary: bool) -> list[tuple[str, s
     return [("stroke_deg", "stroke deg") if key == "stroke_mm" else (key, load_label(label, True)) for key, label in cols]
 
 
+#: a move's sense for a rotary load: a sley turns, it does not go up or down
+_ROTARY_DIRECTIONS = {"up": "positive", "down": "negative"}
+
+
+def direction_word(direction: str | None, rotary: bool) -> str | None:
+    """A move's sense in words: ``up``/``down`` for a linear load, ``positive``/``negative`` for a rotary one."""
+    return _ROTARY_DIRECTIONS.get(direction, direction) if rotary else direction
+
+
 def with_load_stroke(row: dict, rotary: bool) -> dict:
-    """``row`` with ``stroke_deg`` beside its ``stroke_mm`` (which holds SI x 1e3) for a rotary load."""
+    """``row`` with ``stroke_deg`` beside its ``stroke_mm`` (which holds SI x 1e3) for a rotary load, and its
+    ``direction`` in a rotary load's words."""
     if not rotary or "stroke_mm" not in row:
         return row
-    return {**row, "stroke_deg": math.degrees(row["stroke_mm"] * 1e-3)}
+    out = {**row, "stroke_deg": math.degrees(row["stroke_mm"] * 1e-3)}
+    if "direction" in row:
+        out["direction"] = direction_word(row["direction"], True)
+    return out
