@@ -6,7 +6,8 @@ from __future__ import annotations
 import sys
 
 from ..errors import ProblemError
-from .common import _emit, _load, _plot_path, _write_figure, drive_used, progress_bar, spm_tag, step_angle
+from .common import (_emit, _load, _plot_path, _write_figure, drive_used, progress_bar, require_belt_drive, spm_tag,
+                     step_angle)
 
 
 def cmd_laws(args) -> int:
@@ -147,6 +148,7 @@ def cmd_accuracy(args) -> int:
     from ..servo.accuracy import accuracy_report
 
     problem = _load(args)
+    require_belt_drive(problem, "accuracy")
     stroke, label, extra = args.design_stroke, "", []
     if stroke is not None:
         label = f"optimal ({args.design_data.get('objective', 'design')})"
@@ -177,6 +179,7 @@ def cmd_tradeoff(args) -> int:
     from ..studies.tradeoff import RESOLUTION_RANGE_SPM, tradeoff
 
     problem = _load(args)
+    require_belt_drive(problem, "tradeoff")
     accuracies = None
     if args.accuracies:
         try:

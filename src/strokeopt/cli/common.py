@@ -123,6 +123,16 @@ def drive_used(args, problem, motor=None, pulley_teeth=None) -> dict:
     return out
 
 
+def require_belt_drive(problem, command: str) -> None:
+    """``accuracy`` and ``tradeoff`` model a belt drive's servo loop (motor, pulley, belt span, encoder): a
+    problem with another transmission (a gearbox, a screw and lever) is refused in one line naming it."""
+    name = problem.transmission.name
+    if name != "belt_pulley":
+        raise ProblemError(str(problem.file), "transmission.type",
+                           f"is {name!r}; strokeopt {command} models the servo loop of a belt drive (motor, pulley "
+                           f"and belt span): it needs transmission.type = \"belt_pulley\" with pulley_teeth")
+
+
 def step_angle(problem) -> float | None:
     """The step angle [rad] of the problem's motor when it is a stepper (``drive.motor``), else None."""
     drive = getattr(problem, "drive", None)
