@@ -181,3 +181,17 @@ def test_a_misspelt_scene_gets_a_hint(reference_path, capsys):
     assert run(["simulate", str(reference_path), "--scene", "relase", "--plot", "none"]) == 2
     err = capsys.readouterr().err
     assert "did you mean 'release'" in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("option, value", [("--rtol", "5"), ("--rtol", "0.1"), ("--rtol", "0"), ("--rtol", "1e-13"),
+                                           ("--atol", "0.1"), ("--atol", "-1e-6"), ("--atol", "nan")])
+def test_integrator_tolerances_out_of_range_are_refused(capsys, reference_path, option, value):
+    """--rtol 5 was accepted (and ended in 'implausible forces', exit 1): the tolerances are ranged like a file's
+    field (contact/scene.TOLERANCE_RANGES says why), refused in one line naming the option, before any run."""
+    assert main(["simulate", str(reference_path), f"{option}={value}", "--plot", "none"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.startswith(f"strokeopt: error: {option}: must be a positive number in [")
+
+
+def test_integrator_tolerances_in_range_run(capsys, reference_path):
+    assert main(["simulate", str(reference_path), "--rtol", "0.01", "--atol", "0.001", "--plot", "none"]) == 0

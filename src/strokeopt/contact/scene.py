@@ -47,6 +47,14 @@ if TYPE_CHECKING:
 MAX_STEPS = 1_000_000
 BUDGET_RTOL = 1e-5  # the tolerance max_steps is stated at
 
+#: The integrator's tolerances a simulation accepts (SimulationOptions.check; simulate --rtol, --atol).
+#: rtol: up to 1e-2 (at 0.1 the reference scene's peak forces leave their plausible bound and its impact is
+#: known to 10 %); down to 1e-12, a few thousand times the double's rounding (the tolerance study's reference
+#: is 1e-9). atol, on the scaled states (positions in mm, velocities in m/s): up to 1e-3, the 1 um below which
+#: a gap counts as closed (contact/events.GAP_CLOSED); at 1e-1 the follower's lag starts 20 deg early;
+#: down to 1e-12 (states of order 10 mm then hold 13 digits).
+TOLERANCE_RANGES = {"rtol": (1e-12, 1e-2), "atol": (1e-12, 1e-3)}
+
 
 @dataclass(frozen=True)
 class Scene:

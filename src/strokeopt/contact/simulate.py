@@ -81,7 +81,7 @@ import numpy as np
 
 from ..errors import ProblemError, SolverError
 from .events import scene_metrics
-from .scene import BUDGET_RTOL
+from .scene import BUDGET_RTOL, TOLERANCE_RANGES
 from .peaks import PEAK_POINTS, TIGHTER, scene_peaks
 
 METHODS = ("cvodes", "idas")
@@ -117,9 +117,10 @@ class SimulationOptions:
         if self.method not in METHODS:
             raise ProblemError("options", "method", f"{self.method!r} is not one of {', '.join(METHODS)}")
         for name in ("rtol", "atol", "resolution_deg"):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise ProblemError("options", name, f"must be a positive number, got {value!r}")
+            value, (lo, hi) = getattr(self, name), TOLERANCE_RANGES.get(name, (0.0, math.inf))  # scene.py: why
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0 and lo <= value <= hi):
+                raise ProblemError("options", name, f"must be a positive number" + (
+                    f" in [{lo:g}, {hi:g}]" if name in TOLERANCE_RANGES else "") + f", got {value!r}")
         if not (math.isfinite(self.smoothing) and self.smoothing >= 0):
             raise ProblemError("options", "smoothing", f"must be zero (hard switches) or positive, got {self.smoothing!r}")
         if self.max_steps is not None and not (isinstance(self.max_steps, int) and self.max_steps >= 1):
