@@ -81,3 +81,23 @@ def test_a_judged_design_is_verified(reference):
     verified = so.verify_design(so.solve_design(judged))
     assert verified.strict_ok() and verified.verdict.startswith("verified (scene 'release'): ")
     assert "lag" in verified.verdict and "impact velocity" in verified.verdict
+
+
+def test_verdict_counts_in_the_right_number():
+    """'1 criteria not judged' was printed: one criterion, one design limit are singular, more are plural."""
+    from types import SimpleNamespace
+
+    from strokeopt.io.plain import counted
+    from strokeopt.studies.verified import _verdict
+
+    lag = {"criterion": "lag", "ok": None, "value": 1.7, "unit": "mm"}
+    block = {"status": "ok", "scene": "release", "criteria": [lag, {"criterion": "premature release", "ok": True}]}
+    design = SimpleNamespace(status="optimal", notes=[], checks=[{"name": "peak_torque", "ok": True}])
+    one = ({**lag, "field": "design.contact.lag_max_mm"},)
+    assert _verdict(design, block, one).startswith("solved, 1 criterion not judged (scene 'release'): lag 1.7 mm")
+    two = one + ({"criterion": "impact velocity", "value": 2.6, "unit": "m/s",
+                  "field": "design.contact.impact_velocity_max_m_s"},)
+    assert _verdict(design, block, two).startswith("solved, 2 criteria not judged")
+    assert _verdict(design, None, ()) == ("solved: 1 design limit met on the rigid model; nothing re-simulated "
+                                          "(no [servo] section, no scenes)")
+    assert counted(1, "criterion", "criteria") == "1 criterion" and counted(3, "design limit") == "3 design limits"

@@ -52,3 +52,8 @@ def format_value(x: Any, digits: int = 4) -> str:
             return f"{x:.{digits - 1}e}"
         return f"{x:.{digits}g}" if abs(x) >= 10**digits else f"{x:.{max(digits - 1 - int(math.floor(math.log10(abs(x)))), 0)}f}"
     return str(x)
+
+
+def counted(n: int, singular: str, plural: str | None = None) -> str:
+    """``n`` and its noun in the right number: '1 criterion', '2 criteria', '1 design limit'."""
+    return f"{n} {singular if n == 1 else plural or singular + 's'}"

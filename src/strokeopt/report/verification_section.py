@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+from ..io.plain import counted
 from . import html as h
 from .machine import ELASTIC_CHAIN
 
@@ -99,7 +100,7 @@ def section_verification(d) -> str:
         oks = [r["ok"] for r in block["criteria"]]
         counts = [(oks.count(True), "met"), (oks.count(False), "failed"),
                   (oks.count(None), "not judged (the problem sets no limit: the value is reported)")]
-        judged += h.para(f"Of {len(oks)} criteria: " + ", ".join(f"{n} {what}" for n, what in counts if n) + ".")
+        judged += h.para(f"Of {counted(len(oks), 'criterion', 'criteria')}: " + ", ".join(f"{n} {what}" for n, what in counts if n) + ".")
         out += f'<div class="keep">{judged}</div>'  # the judgement stays with the section's heading
     out += _chain_verification(d) if d.machine.scene == ELASTIC_CHAIN else _needle_bar_verification(d)
     if d.not_simulated:

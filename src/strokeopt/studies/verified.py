@@ -21,6 +21,7 @@ from ..contact.verify import LIMIT_FIELDS, design_verification, verify
 from ..design.compare import compare_with_laws
 from ..design.result import design_summary
 from ..design.solve import solve_design, verified_handover
+from ..io.plain import counted
 
 
 @dataclass(frozen=True)
@@ -187,9 +188,9 @@ def _verdict(design, block: dict | None, unjudged: tuple) -> str:
     if unjudged:
         values = ", ".join(f"{r['criterion']} {r['value']:.4g} {r['unit']}" for r in unjudged)
         fields = ", ".join(r["field"] for r in unjudged)
-        return (f"solved, {len(unjudged)} criteria not judged{where}: {values} (no limit: set {fields}); "
+        return (f"solved, {counted(len(unjudged), 'criterion', 'criteria')} not judged{where}: {values} (no limit: set {fields}); "
                 f"met: {', '.join(met) or 'the design limits'}{also}")
     if block is None and handover is None:
-        limits = f"{len(judged)} design limits met on the rigid model" if judged else "no limit to check"
+        limits = f"{counted(len(judged), 'design limit')} met on the rigid model" if judged else "no limit to check"
         return f"solved: {limits}; nothing re-simulated (no [servo] section, no scenes)"
-    return f"verified{where}: " + ", ".join(met + [f"{len(judged)} design limits met"]) + also
+    return f"verified{where}: " + ", ".join(met + [f"{counted(len(judged), 'design limit')} met"]) + also
