@@ -39,7 +39,7 @@ def plot_overlay(datas: list[ReportData], names: list[str]):
     peak marked), or None without a drive."""
     import matplotlib.pyplot as plt
 
-    from ..design.torque import design_torque
+    from ..design.torque import design_torque_path
     from ..motion.stroke import StrokeFunction
     from .drive import draw_torque_speed, mark_operating_points, torque_angle_axis
     from .figures import PRINT_WIDTH_IN, legend_outside
@@ -61,7 +61,7 @@ def plot_overlay(datas: list[ReportData], names: list[str]):
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     drawn = False
     for k, (d, n) in enumerate(zip(datas, names)):
-        torque = design_torque(d.design, samples=1441)
+        torque = design_torque_path(d.design, samples=1441)  # its peak: the checks' (the load's switches read)
         if torque is None:
             continue
         t, terms = torque

@@ -47,11 +47,11 @@ def plot_design(design: Design, law_stroke=None, path=None):
     with a drive, the design's torque-speed path over the cycle with its peak and RMS operating
     points over its motor's peak, rated and drive-limit curves."""
     import matplotlib.pyplot as plt
-    from ..design.torque import design_torque
+    from ..design.torque import design_torque_path
     from .drive import draw_torque_speed
     from .motion import draw_kinematics
 
-    path_torque = design_torque(design)
+    path_torque = design_torque_path(design, 3601)  # its peak: the checks' (the load's switches read)
     fig = plt.figure(figsize=(15 if path_torque else 9, 9), constrained_layout=True)
     grid = fig.add_gridspec(4, 2 if path_torque else 1, width_ratios=[1.25, 1] if path_torque else None)
     axes = [fig.add_subplot(grid[0, 0])]

@@ -181,10 +181,10 @@ def plot_drive(design):
     curve) and the torque over the cam angle by term, one above the other."""
     import matplotlib.pyplot as plt
 
-    from ..design.torque import design_torque
+    from ..design.torque import design_torque_path
     from .drive import draw_torque_speed, draw_torque_terms
 
-    t, terms = design_torque(design, samples=1441)
+    t, terms = design_torque_path(design, samples=1441)  # its peak: the checks' (the load's switches read)
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(PRINT_WIDTH_IN, 7.6), constrained_layout=True,
                                    height_ratios=[1.25, 1])
     stepper = getattr(design.motor_spec, "kind", "servo") == "stepper"
