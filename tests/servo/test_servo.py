@@ -12,7 +12,6 @@ import pytest
 
 from strokeopt import ProblemError, SolverError
 from strokeopt.servo.accuracy import handover_accuracy, residual_vibration_table
-from strokeopt.servo.kernel import error_kernel
 from strokeopt.servo.loop import build_loop, loop_margins, simulate_loop, tune
 from strokeopt.servo.plant import DriveAxis, axis_from_problem, belt_stiffness
 from strokeopt.servo.settings import ServoSettings
@@ -214,20 +213,6 @@ def test_servo_computes_and_report_draws():
 
 
 # --------------------------------------------------------------------------- the design constraint and the trade-off
-
-
-def test_error_kernel_reproduces_the_simulation(setup):
-    # the linear functional the design uses equals the loop simulation with a continuous reference
-    import strokeopt.servo as servo
-
-    problem, settings, axis, gains = setup
-    stroke = problem.stroke(600)
-    kernel = error_kernel(axis, settings, gains, stroke.period)
-    sch = problem.timing.schedule(600)
-    t_h = sch.t_start[1] + sch.duration[1]
-    continuous = replace(settings, control_cycle=10e-6)
-    sim = handover_accuracy(problem, stroke, 600, settings=continuous, axis=replace(axis, load=None), gains=gains)
-    assert kernel.error_at(stroke, t_h) == pytest.approx(sim.at_handover(sim.error), rel=0.02)
 
 
 def test_servo_term_is_given_to_problems_with_a_servo_section(reference):

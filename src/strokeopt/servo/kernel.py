@@ -1,7 +1,6 @@
 """The servo's term of the design's handover-accuracy constraint: :class:`ServoErrorTerm`, passed to the
 design as one of ``Problem.error_terms``: the full servo simulation's error over the handover window as rows
-linear in the move accelerations (:mod:`.table_term`). :class:`ErrorKernel` is the error of the loop with a
-continuous reference as a functional of the acceleration (the loop's linearity, checked by the tests).
+linear in the move accelerations (:mod:`.table_term`).
 
 The design does not import this module: the problem file (:mod:`strokeopt.files.problem_file`) gives the
 term to a problem with a ``[servo]`` section, and :func:`strokeopt.design.solve.solve_design` takes it
@@ -10,81 +9,20 @@ from there (or from its ``error_terms`` argument)."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 
 from .accuracy import TABLE_PHASES
 from .error_expression import ErrorExpression
-from .loop import Gains, build_loop, tuned_gains as _tuned
-from .lti import forced_response
-from .plant import DriveAxis, axis_from_problem
-from .settings import ServoSettings
+from .loop import tuned_gains as _tuned
+from .plant import axis_from_problem
 from .table_term import PositionMap, error_rows, table_response
 
 
 
 # --------------------------------------------------------------------------- the design constraint
-
-
-@dataclass(frozen=True)
-class ErrorKernel:
-    """The bar error at one instant as a linear functional of the stroke's acceleration.
-
-    For the periodic steady state of the loop (continuous reference, no
-    table sampling), ``e(t) = integral over one cycle of K_T(t - sigma) a(sigma) d sigma``
-    with ``K_T`` the derivative of the error's response to a unit step of
-    acceleration, folded onto one period. ``tau`` and ``values`` sample ``K_T``
-    on ``[0, period]``.
-    """
-
-    period: float
-    delay: float
-    tau: np.ndarray
-    values: np.ndarray
-
-    def __call__(self, tau) -> np.ndarray:
-        return np.interp(np.mod(tau, self.period), self.tau, self.values)
-
-    def error_at(self, stroke, t: float, points: int = 20001) -> float:
-        """``e(t + delay)`` for a stroke (numeric check of the functional)."""
-        sigma = np.linspace(0.0, self.period, points)
-        a = stroke.evaluate(sigma).a
-        return float(np.trapezoid(self(t + self.delay - sigma) * a, sigma))
-
-
-_KERNELS: dict = {}
-
-
-def error_kernel(axis: DriveAxis, settings: ServoSettings, gains: Gains, period: float) -> ErrorKernel:
-    """The :class:`ErrorKernel` of a loop for a cycle of ``period`` seconds (cached)."""
-    key = (axis, settings, gains, round(period, 12))
-    if key in _KERNELS:
-        return _KERNELS[key]
-    loop = build_loop(replace(axis, load=None), settings, gains)
-    slowest = float(np.min(-loop.poles.real))
-    horizon = max(period, 12.0 / slowest)
-    step = min(settings.position_sampling / 25, period / 4000)
-    t = np.arange(0.0, horizon + step, step)
-    d = settings.sum_small_time_constants
-    r = axis.radius
-    td = np.clip(t - d, 0.0, None)
-    s_ref = td**2 / 2  # the bar position commanded by a unit step of acceleration at t = 0, as the loop sees it
-    u = np.vstack([s_ref / r, td / r, axis.total_inertia / r * np.ones_like(t), 0 * t])
-    x = forced_response(loop.system, t, u)[0][2]
-    e_step = s_ref - x
-    k = np.gradient(e_step, t)
-    n_per = int(round(period / step))
-    tau = t[: n_per + 1]
-    folded = np.zeros(n_per + 1)
-    for start in range(0, len(t), n_per):
-        chunk = k[start: start + n_per + 1]
-        folded[: len(chunk)] += chunk
-    if len(_KERNELS) > 32:
-        _KERNELS.pop(next(iter(_KERNELS)))
-    _KERNELS[key] = ErrorKernel(period, d, tau, folded)
-    return _KERNELS[key]
 
 
 @dataclass(frozen=True)
