@@ -51,3 +51,16 @@ def test_a_ratio_goal_is_judged_like_a_time_goal():
     assert result(1.9).meets_target is True and result(2.1).meets_target is False
     assert "980 / 500 at most 2x -> 2.10x: NOT met" in format_results([result(2.1)])
     assert BenchResult([], measured_s=1.0, ratio=3.0, ratio_label="x").meets_target is None  # no goal, no verdict
+
+
+def test_a_benchmark_without_a_peer_prints_json(capsys, monkeypatch):
+    # the linkage synthesis has no peer (ratio NaN): --json said "NaN in report field" with a traceback
+    from strokeopt.bench import registry
+
+    def alone():
+        return BenchResult([BenchRow("x", 0.5)], measured_s=0.5, ratio=float("nan"), ratio_label="no peer")
+
+    monkeypatch.setitem(registry.REGISTRY, "test_alone", registry.Benchmark("test_alone", "no peer", None, alone))
+    assert main(["bench", "--only", "test_alone", "--json"]) == 0
+    (only,) = json.loads(capsys.readouterr().out)["benchmarks"]
+    assert only["ratio"] is None and only["rows"][0]["seconds"] == 0.5

@@ -59,7 +59,8 @@ class BenchResult:
 
     def as_dict(self) -> dict:
         return {"name": self.name, "description": self.description, "target_s": self.target_s,
-                "measured_s": self.measured_s, "meets_target": self.meets_target, "ratio": self.ratio,
+                "measured_s": self.measured_s, "meets_target": self.meets_target,
+                "ratio": None if self.ratio != self.ratio else self.ratio,  # NaN: the peer was not measured
                 "ratio_label": self.ratio_label, "ratio_max": self.ratio_max, "notes": self.notes,
                 "rows": [{"label": r.label, "seconds": r.seconds, "note": r.note} for r in self.rows]}
 
