@@ -107,6 +107,13 @@ def test_mesh_study(capsys, tmp_path):
     assert (tmp_path / "study.png").is_file()
 
 
+def test_mesh_study_text_says_the_violation_is_relative(capsys):
+    """The column had no unit: the violation between nodes is relative to the bound (value / limit - 1)."""
+    assert main(["solve", str(KNOWN / "jerk_bounded_peak_accel.toml"), "--study", "mesh", "--plot", "none"]) == 0
+    text = capsys.readouterr().out
+    assert "violation between nodes (relative)" in text and "relative to the bound (value / limit - 1)" in text
+
+
 def test_bad_input_exits_2_with_one_line(capsys):
     assert main(["solve", str(KNOWN / "min_jerk.toml"), "--objective", "min_speed"]) == 2
     err = capsys.readouterr().err

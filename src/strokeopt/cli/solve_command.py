@@ -89,11 +89,12 @@ def _mesh_study(args, problem, progress) -> int:
         _emit(to_json({"status": "ok", "problem": problem.name, "spm": problem.spm, "study": "mesh",
                        "drive": drive_used(args, problem), "rows": rows}))
     else:
-        print(f"{problem.name} at {problem.spm:g} spm: the same design on each mesh (file's motor and pulley); "
-              f"error against the last (finest) mesh")
+        print(f"{problem.name} at {problem.cycle.rate(problem.spm)}: the same design on each mesh (file's motor and "
+              f"pulley); error against the last (finest) mesh; violation between nodes: the largest excess over a "
+              f"bound between the collocation nodes, relative to the bound (value / limit - 1)")
         print(format_table(rows, [("intervals", "intervals"), ("degree", "degree"), ("variables", "variables"),
                                   ("objective_value", "objective"), ("objective_error_pct", "error %"),
-                                  ("violation_between_nodes", "violation between nodes"),
+                                  ("violation_between_nodes", "violation between nodes (relative)"),
                                   ("time_s", "build + solve time s")]))
     _write_figure(lambda p: plot_mesh_study(rows, p),
                   _plot_path(args, "solve_mesh", spm_tag(problem.spm), _objective(args, problem)), args)
