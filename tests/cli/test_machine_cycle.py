@@ -77,3 +77,10 @@ def test_servo_loop_commands_refuse_a_drive_without_a_belt(capsys, command):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "None" not in err
     assert "loom_beatup_servo.toml: transmission.type: is 'gearbox'" in err and "belt_pulley" in err
+
+
+def test_knitting_rig_counts_test_cycles(capsys):
+    """The knitting file's cycle is a test cycle of density changes, not a stitch ([machine] cycle)."""
+    assert main(["kinematics", str(ROOT / "problems" / "knitting_stitch_density.toml"), "--plot", "none"]) == 0
+    text = capsys.readouterr().out
+    assert "at 1000 test cycles/min (cam cycle 60.0 ms = 1 test cycle of 60.0 ms" in text
