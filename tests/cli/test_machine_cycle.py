@@ -84,3 +84,6 @@ def test_knitting_rig_counts_test_cycles(capsys):
     assert main(["kinematics", str(ROOT / "problems" / "knitting_stitch_density.toml"), "--plot", "none"]) == 0
     text = capsys.readouterr().out
     assert "at 1000 test cycles/min (cam cycle 60.0 ms = 1 test cycle of 60.0 ms" in text
+    assert main(["simulate", str(ROOT / "problems" / "knitting_stitch_density.toml"), "--plot", "none"]) == 0
+    text = capsys.readouterr().out
+    assert "6 states) at 1000 test cycles/min" in text and "spm" not in text

@@ -320,7 +320,7 @@ def cmd_simulate(args) -> int:
             if premature is not None:
                 print(f"premature release from {premature:g} spm: gap N closes before the impact (columns "
                       f"'premature', 'min gap N mm')")
-        _write_figure(lambda p: plot_sweep(rows, p),
+        _write_figure(lambda p: plot_sweep(rows, p, problem.cycle),
                       _plot_path(args, "simulate_sweep", scene, spm_tag(args.spm), problem.stroke().label), args)
         return 0
     result = simulate_scene(problem, scene, problem.spm, stroke=args.design_stroke, options=options)

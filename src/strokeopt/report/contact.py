@@ -13,6 +13,7 @@ import numpy as np
 
 from ..contact.events import GAP_CLOSED, LAG_THRESHOLD
 from ..contact.studies import lag_onset_spm
+from ..io.cycle import STITCH, cycle_of
 from .figures import frame_label
 from .format import drive_text, format_table
 
@@ -33,7 +34,7 @@ def scene_text(problem, scene: str, summary: dict) -> str:
     sc = problem.scenes[scene]
     roles = sc.model.events
     s = summary
-    lines = [f"{problem.name}: scene {scene!r} ({', '.join(sc.bodies)}; {sc.state_size} states) at {s['spm']:g} spm, "
+    lines = [f"{problem.name}: scene {scene!r} ({', '.join(sc.bodies)}; {sc.state_size} states) at {problem.cycle.rate(s['spm'])}, "
              f"stroke: {s['stroke']}, interval times {problem.timing.interval_times}"]
     if s["gap_N_mm"] is not None:
         lines.append(f"gap N used by the model: {s['gap_N_mm']:g} mm (model.contacts.{roles.gap}.gap_mm)")
@@ -205,7 +206,7 @@ def plot_scene(r, path=None, problem=None, window=None):
                 pad = 0.06 * (hi - lo or 1.0)
                 ax.set_ylim(lo - pad, hi + pad)
     iv = m.get("impact_velocity_m_s")
-    axes[0].set_title(f"scene {r.scene}, {r.stroke_label or 'stroke'} at {r.spm:g} spm"
+    axes[0].set_title(f"scene {r.scene}, {r.stroke_label or 'stroke'} at {cycle_of(problem).rate(r.spm)}"
                       + (f": impact {iv:.2f} m/s" if iv is not None else ""))
     if path is not None:
         from .figures import fit_titles
@@ -216,8 +217,9 @@ def plot_scene(r, path=None, problem=None, window=None):
     return fig
 
 
-def plot_sweep(rows: list[dict], path=None):
-    """Impact velocity and min remaining gap N vs spm."""
+def plot_sweep(rows: list[dict], path=None, cycle=STITCH):
+    """Impact velocity and min remaining gap N over the machine's rate (``cycle``: its cycle, io/cycle.py)."""
+    cycle = cycle_of(cycle)
     spm = [r["spm"] for r in rows]
     fig, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 6), constrained_layout=True)
     axes[0].plot(spm, [np.nan if r["impact_velocity_m_s"] is None else r["impact_velocity_m_s"] for r in rows], "o-", ms=3)
@@ -231,10 +233,10 @@ def plot_sweep(rows: list[dict], path=None):
     for ax in axes:
         ax.grid(True, alpha=0.3)
         if onset is not None:
-            ax.axvline(onset, color="tab:orange", ls="--", lw=1, label=f"follower lags from {onset:g} spm")
+            ax.axvline(onset, color="tab:orange", ls="--", lw=1, label=f"follower lags from {cycle.rate(onset)}")
     if onset is not None:
         axes[0].legend(fontsize=8, loc="best")  # named in a legend placed clear of the curve
-    axes[1].set_xlabel("stitch rate [spm]")
+    axes[1].set_xlabel(f"{cycle.rate_name} [{cycle.rate_unit}]")
     axes[0].set_title(f"scene {rows[0]['scene']}, {rows[0].get('stroke') or 'stroke'}: speed sweep" if rows
                       else "speed sweep")
     if path is not None:
