@@ -81,50 +81,11 @@ import numpy as np
 
 from ..errors import ProblemError, SolverError
 from .events import scene_metrics
-from .scene import BUDGET_RTOL, TOLERANCE_RANGES
+from .options import METHODS, SimulationOptions  # noqa: F401  (the scene's options; METHODS for the readers)
+from .scene import BUDGET_RTOL
 from .peaks import PEAK_POINTS, TIGHTER, scene_peaks
 
-METHODS = ("cvodes", "idas")
 REFINE_POINTS = 200  # an output interval is re-integrated on this many points to locate an event in it
-
-
-@dataclass(frozen=True)
-class SimulationOptions:
-    """How to integrate.
-
-    ``rtol``/``atol`` go to the integrator; ``atol`` is in the scaled states (positions in mm,
-    velocities in m/s). ``smoothing`` (m) = 0 for hard switches. ``resolution_deg``: output grid
-    spacing in the longest stroke piece (shorter pieces get the same number of points, so a finer
-    spacing). ``restart_at_switches``: integrate piecewise between detected contact switches
-    (restarting the integrator at each) instead of across them; slower, kept for the
-    comparison of the tolerance study. ``integrator_options`` pass straight to ``casadi.integrator``.
-    ``verbose``: let SUNDIALS print its own messages (otherwise only the SolverError says why).
-    ``max_steps``: the integrator steps the cycle may take (None: the scene's budget at this tolerance,
-    :meth:`~strokeopt.contact.scene.Scene.step_budget`); a scene that needs more stops (SolverError).
-    """
-
-    method: str = "cvodes"
-    rtol: float = 1e-5
-    atol: float = 1e-6
-    smoothing: float = 0.0
-    resolution_deg: float = 0.25
-    max_steps: int | None = None
-    restart_at_switches: bool = False
-    integrator_options: dict | None = None
-    verbose: bool = False
-
-    def check(self) -> None:
-        if self.method not in METHODS:
-            raise ProblemError("options", "method", f"{self.method!r} is not one of {', '.join(METHODS)}")
-        for name in ("rtol", "atol", "resolution_deg"):
-            value, (lo, hi) = getattr(self, name), TOLERANCE_RANGES.get(name, (0.0, math.inf))  # scene.py: why
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0 and lo <= value <= hi):
-                raise ProblemError("options", name, f"must be a positive number" + (
-                    f" in [{lo:g}, {hi:g}]" if name in TOLERANCE_RANGES else "") + f", got {value!r}")
-        if not (math.isfinite(self.smoothing) and self.smoothing >= 0):
-            raise ProblemError("options", "smoothing", f"must be zero (hard switches) or positive, got {self.smoothing!r}")
-        if self.max_steps is not None and not (isinstance(self.max_steps, int) and self.max_steps >= 1):
-            raise ProblemError("options", "max_steps", f"must be a whole number of steps >= 1, got {self.max_steps!r}")
 
 
 @dataclass
@@ -493,7 +454,7 @@ def _run(sc, scene, spm, stroke, period, ode, grid, stepper, opts, cpu0) -> Scen
         ssub = np.linspace(S[i], S[i + 1], zsub.shape[1])
         return _Series(*_series(ode, sc, zsub, ssub, np.tile(P[:, i:i + 1], (1, len(ssub))))[:4])
 
-    peaks = scene_peaks(sc, ode, result, Z, S, P, stepper) if nx else None
+    peaks = scene_peaks(sc, ode, result, Z, S, P, stepper) if nx and opts.peaks else None
     result.metrics = scene_metrics(result, sc, refine, peaks)
     result.cpu_time_s = time.process_time() - cpu0
     return result

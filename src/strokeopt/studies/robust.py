@@ -22,6 +22,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..contact.options import SimulationOptions
 from ..drive.selection import resolve_drive
 from ..errors import ProblemError
 from .runner import run_study
@@ -157,6 +158,11 @@ def _sample_step(shared, item, warm):
     return judge_sample(design, [f"{t.field}={v!r}" for t, v in zip(tolerances, values)]), None
 
 
+#: The contact scene of a sample: the default integration without locating each peak force between the output
+#: points (no force is judged by its size here; the plausibility bound is far above the grid's error).
+SAMPLE_SCENE_OPTIONS = SimulationOptions(peaks=False)
+
+
 def judge_sample(design, overrides: list[str]) -> dict:
     """The design's stroke on its problem with ``overrides``: handover error, lag, impact velocity, premature
     release, peak torque and belt checks, ``ok`` when every judged limit holds and ``failed`` naming the rest."""
@@ -165,7 +171,7 @@ def judge_sample(design, overrides: list[str]) -> dict:
         problem, motor=design.drive.actuator, pulley_teeth=design.pulley_teeth, pitch_diameter=design.pitch_diameter,
         include_pulley_inertia=getattr(design.settings, "include_pulley_inertia", True))
     sampled = replace(design, problem=problem, drive=drive, verification=None, status="optimal")
-    verified = verify_design(sampled)
+    verified = verify_design(sampled, options=SAMPLE_SCENE_OPTIONS)
     row, failed = {}, []
     if verified.accuracy is not None:
         limit = design.settings.accuracy if design.settings is not None else None
