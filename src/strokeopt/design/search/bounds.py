@@ -72,9 +72,10 @@ def best_bound_first(req, motors: list) -> list[tuple[object, float | None]]:
     """``motors`` with the bound each gives the objective, best first: where the objective is the peak torque
     (min_peak_torque) its :func:`torque_lower_bound` bounds every design of the motor, so a search that has a
     design at least as good as a motor's bound need not solve that motor (:func:`cannot_win`). For any other
-    objective the bound says nothing of the objective: the catalogue's order, bounds None."""
+    objective the bound says nothing of the objective: the smallest motor (least rated torque) first, bounds None,
+    so where designs tie the smallest motor is the one the search keeps (parts.py)."""
     if req.objective != "min_peak_torque":
-        return [(m, None) for m in motors]
+        return [(m, None) for m in sorted(motors, key=lambda m: getattr(m, "rated_torque", None) or 0.0)]
     bounds = [(m, (torque_lower_bound(req, m) or (None,))[0]) for m in motors]
     return sorted(bounds, key=lambda mb: -math.inf if mb[1] is None else mb[1])
 

@@ -48,7 +48,7 @@ def choose_parts(req: SolveRequest, progress=None):
                      f"best design's {min(r[0].value for r in results):.4g} N m: " + ", ".join(unsolved))
     if not results:
         raise _no_motor(failures, spm)
-    best, teeth = min(results, key=lambda r: r[0].value)
+    best, teeth = _best(results)
     if candidates > 1:
         notes.append(f"motor chosen among {candidates} by enumeration ({len(failures)} infeasible): "
                      f"lowest {req.objective}")
@@ -94,6 +94,19 @@ def _search(req: SolveRequest, ordered: list, failures: list, progress):
         except SolverError as exc:
             failures.append((motor, exc))
     return results, unsolved, total_time
+
+
+#: Designs whose objectives differ by less than this (relative) tie: the solver's tolerance, not a better design.
+TIE = 1e-6
+
+
+def _best(results: list):
+    """The best ``(Outcome, teeth)``; among designs that tie (:data:`TIE`), the one with the smallest motor (the
+    least rated torque): where the rate or the objective is set by the stroke and the belt, not the motor (min_time
+    at the jerk bound and the belt's limit), any motor that reaches it would do and the smallest is the one to buy."""
+    lowest = min(r[0].value for r in results)
+    tied = [r for r in results if r[0].value <= lowest + TIE * abs(lowest)]
+    return min(tied, key=lambda r: (getattr(r[0].motor, "rated_torque", None) or 0.0, r[0].value))
 
 
 def _no_motor(failures: list, spm) -> SolverError:
