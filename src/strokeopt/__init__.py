@@ -21,6 +21,15 @@ The data flow, one package per step (floors in docs/architecture.md; imports poi
 public API exported here: ``solve_verified`` gives the same answer as ``strokeopt solve``.
 """
 
+import os as _os
+
+# One BLAS thread unless the environment says otherwise (set before numpy is first imported): strokeopt's
+# matrices are small, and a second BLAS thread spent more CPU than it saved (a held-accuracy solve: 12.3 s
+# CPU, 7.3 s wall with two threads; 7.0 s CPU, 7.1 s wall with one), and it took the core a study's second
+# worker runs on. Dask's workers set the same.
+for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    _os.environ.setdefault(_name, "1")
+
 from .drive.catalogue import Belt, Catalogue, Pulley, ServoMotor, load_catalogue
 from .drive.checks import Check, DriveLimits, drive_checks
 from .drive.load import Load, LoadForce, load_torque

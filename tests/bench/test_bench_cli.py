@@ -4,6 +4,7 @@ on a missed target, a missing peer is named instead of a 'nanx' ratio."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 from strokeopt.bench.registry import BenchResult, BenchRow, format_results
 from strokeopt.cli.main import main
@@ -51,6 +52,11 @@ def test_a_ratio_goal_is_judged_like_a_time_goal():
     assert result(1.9).meets_target is True and result(2.1).meets_target is False
     assert "980 / 500 at most 2x -> 2.10x: NOT met" in format_results([result(2.1)])
     assert BenchResult([], measured_s=1.0, ratio=3.0, ratio_label="x").meets_target is None  # no goal, no verdict
+    # a speed-up goal (issue 21: a study on two workers at least 1.6 times one worker)
+    faster = BenchResult([BenchRow("a", 1.0)], measured_s=1.0, ratio=1.5, ratio_label="1 worker / 2 workers",
+                         ratio_min=1.6, name="w", description="d")
+    assert faster.meets_target is False and replace(faster, ratio=1.7).meets_target is True
+    assert "1 worker / 2 workers at least 1.6x -> 1.50x: NOT met" in format_results([faster])
 
 
 def test_a_benchmark_without_a_peer_prints_json(capsys, monkeypatch):

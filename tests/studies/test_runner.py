@@ -162,14 +162,14 @@ def test_runner_options_belong_to_a_study(capsys):
 def test_a_failing_rate_is_reported_with_its_rate_and_the_others_kept(capsys, monkeypatch):
     import strokeopt.studies.sweeps as sweeps
 
-    real = sweeps.solve_verified
+    real = sweeps.solve_checked
 
     def flaky(problem, *, spm, **kw):
         if spm == 33.0:
             raise RuntimeError("the linear solver ran out of memory\n(second line)")
         return real(problem, spm=spm, **kw)
 
-    monkeypatch.setattr(sweeps, "solve_verified", flaky)
+    monkeypatch.setattr(sweeps, "solve_checked", flaky)
     code = main(["solve", str(MIN_JERK), *SWEEP, "--json", "--plot", "none", "--workers", "1"])
     captured = capsys.readouterr()
     rows = json.loads(captured.out)["rows"]
@@ -178,6 +178,34 @@ def test_a_failing_rate_is_reported_with_its_rate_and_the_others_kept(capsys, mo
     assert rows[1]["task_failed"] and rows[1]["reason"] == "task failed: RuntimeError: the linear solver ran out of memory"
     assert "strokeopt: failed: the task of 33 spm: task failed: RuntimeError: the linear solver ran out of memory" \
         in captured.err
+
+
+def test_a_failing_verification_is_reported_with_its_rate_and_the_next_rate_starts_from_its_design(capsys, monkeypatch):
+    """A rate's verification is a task of its own (the finish of its solve): its failure is the rate's, and the
+    next rate's solve, chained to the solve, is not held up by it."""
+    import strokeopt.studies.sweeps as sweeps
+
+    real, starts = sweeps.verify_design, []
+    real_solve = sweeps.solve_checked
+
+    def flaky(design, **kw):
+        if design.spm == 36.0:
+            raise RuntimeError("the integrator stopped\n(second line)")
+        return real(design, **kw)
+
+    def watched(problem, *, spm, warm_start, **kw):
+        starts.append(None if warm_start is None else warm_start.spm)
+        return real_solve(problem, spm=spm, warm_start=warm_start, **kw)
+
+    monkeypatch.setattr(sweeps, "verify_design", flaky)
+    monkeypatch.setattr(sweeps, "solve_checked", watched)
+    code = main(["solve", str(MIN_JERK), *SWEEP, "--json", "--plot", "none", "--workers", "1"])
+    captured = capsys.readouterr()
+    rows = json.loads(captured.out)["rows"]
+    assert code == 1
+    assert [r["feasible"] for r in rows] == [True, True, False, True]
+    assert rows[2]["reason"] == "task failed: RuntimeError: the integrator stopped"
+    assert starts == [None, 30.0, 33.0, 36.0]  # the rate after the failed verification starts from its design
 
 
 def _step_failing_on(shared, item, warm):
@@ -192,6 +220,7 @@ def _step_failing_on(shared, item, warm):
 @pytest.mark.slow
 def test_on_local_workers_a_failure_and_a_lost_task_name_their_items():
     import dask
+    import distributed  # noqa: F401  (its defaults in dask's config first: leaving the set below would drop them)
 
     with dask.config.set({"distributed.scheduler.allowed-failures": 0}):  # the first death loses the task
         outcomes = run_study(_step_failing_on, [0, 1, 2, 3, 4, 5], 4, runner=StudyRunner(2))

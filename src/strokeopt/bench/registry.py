@@ -49,19 +49,24 @@ class BenchResult:
     target_s: float | None = None
     #: a goal on the ratio itself (the ratio at most this), where the goal is relative to the peer measured beside
     ratio_max: float | None = None
+    #: a goal that the ratio be at least this (a speed-up measured beside its peer)
+    ratio_min: float | None = None
 
     @property
     def meets_target(self) -> bool | None:
         goals = [self.measured_s < self.target_s] if self.target_s is not None else []
         if self.ratio_max is not None:
             goals.append(self.ratio <= self.ratio_max)
+        if self.ratio_min is not None:
+            goals.append(self.ratio >= self.ratio_min)
         return all(goals) if goals else None
 
     def as_dict(self) -> dict:
         return {"name": self.name, "description": self.description, "target_s": self.target_s,
                 "measured_s": self.measured_s, "meets_target": self.meets_target,
                 "ratio": None if self.ratio != self.ratio else self.ratio,  # NaN: the peer was not measured
-                "ratio_label": self.ratio_label, "ratio_max": self.ratio_max, "notes": self.notes,
+                "ratio_label": self.ratio_label, "ratio_max": self.ratio_max,
+                "ratio_min": self.ratio_min, "notes": self.notes,
                 "rows": [{"label": r.label, "seconds": r.seconds, "note": r.note} for r in self.rows]}
 
 
@@ -115,6 +120,9 @@ def format_results(results: list[BenchResult]) -> str:
         if r.ratio_max is not None:
             verdict = "met" if r.ratio <= r.ratio_max else "NOT met"
             lines.append(f"  target: {r.ratio_label} at most {r.ratio_max:g}x -> {r.ratio:.2f}x: {verdict}")
+        if r.ratio_min is not None:
+            verdict = "met" if r.ratio >= r.ratio_min else "NOT met"
+            lines.append(f"  target: {r.ratio_label} at least {r.ratio_min:g}x -> {r.ratio:.2f}x: {verdict}")
         lines += [f"  note: {n}" for n in r.notes]
         lines.append("")
     return "\n".join(lines).rstrip()

@@ -96,6 +96,16 @@ def solve_verified(problem, *, objective: str | None = None, spm: float | None =
     :func:`~strokeopt.design.solve.solve_design`'s. Raises :class:`~strokeopt.errors.SolverError` when no
     design exists (naming the constraint).
     """
+    design, accuracy = solve_checked(problem, objective=objective, spm=spm, settings=settings,
+                                     warm_start=warm_start, progress=progress, verbose=verbose)
+    return verify_design(design, accuracy=accuracy, compare=compare, scenes=scenes, options=options)
+
+
+def solve_checked(problem, *, objective: str | None = None, spm: float | None = None, settings=None,
+                  warm_start=None, progress=None, verbose: bool = False):
+    """The first half of :func:`solve_verified`: the design with its handover row from the full servo simulation
+    (and that simulation's result, None without a servo), not yet re-simulated in its contact scenes
+    (:func:`verify_design` is the second half; a study runs the two as separate tasks)."""
     held: dict = {}
 
     def full_simulation(design):
@@ -108,7 +118,7 @@ def solve_verified(problem, *, objective: str | None = None, spm: float | None =
     design = solve_design(problem, objective=objective, spm=spm, settings=settings,
                           warm_start=warm_start, verbose=verbose, progress=progress,
                           handover_check=full_simulation if checked else None)
-    return verify_design(design, accuracy=held.get("accuracy"), compare=compare, scenes=scenes, options=options)
+    return design, held.get("accuracy")
 
 
 def verify_design(design, *, accuracy=None, compare: bool = False, scenes=None, options=None,
