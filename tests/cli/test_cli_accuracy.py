@@ -114,6 +114,11 @@ def test_tradeoff_classic_json_and_plot(capsys, reference_path, tmp_path):
     assert all(p["stroke"] == "modified_sine" and p["binding"] for p in pts)
     assert pts[0]["max_spm"] <= pts[1]["max_spm"]  # a looser accuracy never costs stitch rate
     assert pts[0]["binding"] == "handover_accuracy"
+    # the rate above that the simulation rejected, with its error: beyond the accuracy, within a resolution step
+    first = pts[0]
+    assert first["max_spm"] < first["failed_spm"] <= first["max_spm"] + 100 + 1e-9
+    assert first["failed_error_mm"] > 0.06 and first["failed_reason"].startswith("handover accuracy")
+    assert first["handover_error_mm"] <= 0.06
     assert fig.stat().st_size > 10_000
     assert "torque command" in data["torque_basis"]
 

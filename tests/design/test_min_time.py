@@ -149,7 +149,7 @@ def test_tradeoff_min_time_agrees_with_the_bisection(reference):
 BISECTION_ACCURACY_BOUND = {0.05e-3: 520.0, 0.1e-3: 850.0}
 
 
-@pytest.mark.slow  # a min_time continuation over two accuracies, about 20 s
+@pytest.mark.slow  # min_time at two accuracies and at one of them alone, about 2 minutes
 def test_tradeoff_where_the_accuracy_binds_is_confirmed_and_not_below_the_bisection(reference):
     from strokeopt.studies.tradeoff import tradeoff_optimal
 
@@ -159,6 +159,11 @@ def test_tradeoff_where_the_accuracy_binds_is_confirmed_and_not_below_the_bisect
         # the full simulation of the design at the reported rate meets the accuracy (check_tolerance between
         # the instants the design holds)
         assert pt.handover_error <= pt.accuracy * (1 + reference.design.check_tolerance)
+    # issue 23: an accuracy's answer does not depend on which other accuracies are asked (each min_time starts
+    # from the problem's own rate and stroke): 0.05 mm alone as beside 0.1 mm, to the 10 spm grid
+    (alone,) = tradeoff_optimal(reference, [0.05e-3])
+    assert alone.max_spm == pytest.approx(points[0].max_spm, abs=10.0)
+    assert alone.max_spm >= 630.0  # issue 23's acceptance: at least 630 spm at 0.05 mm
 
 
 @pytest.mark.slow  # three solves at 600 spm

@@ -176,7 +176,8 @@ def cmd_tradeoff(args) -> int:
     from ..report.format import to_json
     from ..report.servo import plot_tradeoff, tradeoff_text
     from ..design.transcription.settings import ACCURACY_RANGE_MM
-    from ..studies.tradeoff import RESOLUTION_RANGE_SPM, tradeoff
+    from ..studies.runner import check_reachable, study_runner
+    from ..studies.tradeoff import DEFAULT_ACCURACIES_MM, RESOLUTION_RANGE_SPM, print_step, tradeoff
 
     problem = _load(args)
     require_belt_drive(problem, "tradeoff")
@@ -194,11 +195,14 @@ def cmd_tradeoff(args) -> int:
     if not lo <= args.resolution <= hi:
         raise ProblemError("--resolution", "", f"must lie in [{lo:g}, {hi:g}] spm (finer than the rate settles to, "
                                                f"or coarser than the search's span), got {args.resolution!r}")
-    def progress(step: str, text: str) -> None:  # a line per step on stderr (stdout: the table or the JSON)
-        print(f"tradeoff {step}: {text}", file=sys.stderr, flush=True)
-
+    runner = None  # the classic law alone starts no worker
+    if args.strokes != "classic":
+        runner = study_runner(args.workers, args.scheduler, tasks=len(accuracies or DEFAULT_ACCURACIES_MM))
+        check_reachable(runner)  # an unreachable scheduler: before the classic law's simulations
     report = tradeoff(problem, accuracies, strokes=args.strokes, resolution=args.resolution,
-                      progress=None if args.json else progress)
+                      progress=None if args.json else print_step, runner=runner)
+    if runner is not None:
+        report["runner"] = runner.describe()
     report = {"status": "ok", **report, "drive": drive_used(args, problem)}
     if args.json:
         _emit(to_json(report))

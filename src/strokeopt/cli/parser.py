@@ -295,9 +295,10 @@ def build_parser() -> argparse.ArgumentParser:
                                    "hold, with the problem's classic law and, separately, with the optimal stroke "
                                    "(strokeopt solve with the accuracy constraint, on the problem's motor and pulley); "
                                    "each point names its binding limit. The optimal stroke: one min_time design "
-                                   "solve per accuracy (loosest first, each warm-started from the last), confirmed "
-                                   "by the full servo simulation (below a rejected rate, a short search with "
-                                   "fixed-rate designs); a line per step on stderr.",
+                                   "solve per accuracy (each from the problem's own rate and stroke, each accuracy "
+                                   "a task: --workers, --scheduler), confirmed by the full servo simulation (below "
+                                   "a rejected rate, a short search with fixed-rate designs); a line per step on "
+                                   "stderr (from worker processes, as they print it).",
                        epilog="Example: strokeopt tradeoff problems/deco2000_needle_bar.toml --strokes classic "
                               "--accuracies 0.05,0.1,0.5")
     p.add_argument("--accuracies", metavar="MM,MM,...", help="required accuracies in mm (default 0.02,0.03,0.05,0.1,0.2,0.3,0.5,1)")
@@ -305,6 +306,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="which strokes to compare (default both)")
     p.add_argument("--resolution", type=float, default=10.0, help="stitch-rate resolution of the search [spm] (default 10)")
     _drive_options(p, "(its motor and pulley only: the stroke is solved again at every rate)")
+    _study_runner_options(p, "the optimal stroke's accuracies (each a task, solved from its own start)")
     _plot_option(p, "tradeoff_<strokes>_<law>_<motor>")
     p.set_defaults(run=cmd_tradeoff)
     _report_parsers(sub, problem)

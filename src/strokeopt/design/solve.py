@@ -56,7 +56,7 @@ from ..io.plain import format_value
 
 def solve_design(problem, *, objective: str | None = None, spm: float | None = None,
                  settings: DesignSettings | None = None, warm_start=None, verbose: bool = False, progress=None,
-                 handover_check=None) -> Design:
+                 handover_check=None, hold_accuracy: bool = False) -> Design:
     """Solve the design problem of ``problem`` at ``spm`` (default: the file's).
 
     ``objective`` overrides ``[design] objective``; ``settings`` replaces ``[design]`` (its mesh, its
@@ -66,9 +66,12 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     problem with none does not check the accuracy). ``handover_check``: a callable ``design -> (error [m],
     what)`` giving the handover error of a full simulation of the design (the verified pipeline passes the
     servo model's, which this package does not import); the check table then reports that number, with the
-    design's own terms beside it. Raises :class:`SolverError` naming the constraint that cannot be met.
+    design's own terms beside it. ``hold_accuracy``: a ``min_time`` holds the handover accuracy from its first
+    solve (as it does warm-started from a design that held it), not once a solution breaks it: where the accuracy
+    binds, the rate a first solve without it finds may be one where no stroke meets it.
+    Raises :class:`SolverError` naming the constraint that cannot be met.
     """
-    req = _request(problem, objective, spm, settings, warm_start, verbose)
+    req = _request(problem, objective, spm, settings, warm_start, verbose, hold_accuracy)
     settings, drive, terms = req.settings, req.drive, req.error_terms
     t_start = time.perf_counter()
     notes: list[str] = []
@@ -104,7 +107,7 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     return _judge(design, best, drive, terms)
 
 
-def _request(problem, objective, spm, settings, warm_start, verbose) -> SolveRequest:
+def _request(problem, objective, spm, settings, warm_start, verbose, hold_accuracy=False) -> SolveRequest:
     """The solve request of :func:`solve_design`: its arguments checked, the drive set up."""
     settings = settings or getattr(problem, "design", None) or DesignSettings()
     objective = objective or settings.objective
@@ -129,7 +132,7 @@ def _request(problem, objective, spm, settings, warm_start, verbose) -> SolveReq
                                "--pulley-teeth, or design.motor_choice = \"fixed\" and design.pulley = \"fixed\"")
     # a min_time warm-started from a design that held its accuracy holds it from the first solve: the rate a
     # solve without it finds is the one the accuracy then pulls back from (continuation, studies/tradeoff.py)
-    held = free_time(objective) and bool(getattr(warm_start, "accuracy_enforced", False))
+    held = free_time(objective) and (hold_accuracy or bool(getattr(warm_start, "accuracy_enforced", False)))
     return SolveRequest(problem, spm, settings, settings.mesh, objective, drive, None, options, warm, radius0,
                         error_terms=terms, enforce_accuracy=held)
 

@@ -126,7 +126,8 @@ def tradeoff_text(report: dict) -> str:
             f"rates to {report['resolution_spm']:g} spm)\n{report['torque_basis']}")
     return head + "\n\n" + format_table(report["points"], [
         ("accuracy_mm", "accuracy mm"), ("stroke", "stroke"), ("max_spm", "max spm"), ("binding", "binding limit"),
-        ("confirmed_spm", "simulated at spm"), ("handover_error_mm", "error there mm")])
+        ("confirmed_spm", "confirmed at spm"), ("handover_error_mm", "its error mm"),
+        ("failed_spm", "failed at spm"), ("failed_error_mm", "its error mm")])
 
 
 def _words(name: str) -> str:
@@ -135,7 +136,9 @@ def _words(name: str) -> str:
 
 
 def plot_tradeoff(report: dict, path: str | Path | None = None):
-    """Highest stitch rate over the required handover accuracy, one line per stroke, binding limits marked."""
+    """Highest stitch rate over the required handover accuracy, one line per stroke: each point the rate the full
+    simulation confirmed, labelled with the limit that binds there and the error the simulation found; a hollow
+    marker above it the rate the simulation rejected."""
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
@@ -149,11 +152,32 @@ def plot_tradeoff(report: dict, path: str | Path | None = None):
         y = [p["max_spm"] for p in pts]
         line, = ax.plot(x, y, lw=1.4, label=_words(kind))
         right = max(x)
+        # the rate above each point that the full simulation rejected: a hollow marker joined to the point
+        failed = [p for p in pts if p.get("failed_spm") is not None]
+        for p in failed:
+            ax.plot([p["accuracy_mm"]] * 2, [p["max_spm"], p["failed_spm"]], lw=0.8, color=line.get_color(), alpha=0.6)
+        if failed:
+            ax.plot([p["accuracy_mm"] for p in failed], [p["failed_spm"] for p in failed], "v", mfc="none",
+                    color=line.get_color(), label=f"{_words(kind)}: the rate above, rejected by the simulation")
+        said = None  # a label only where the rate or the binding limit changes (looser accuracies repeat them)
         for p in pts:
             ax.plot(p["accuracy_mm"], p["max_spm"], markers.get(p["binding"], "x"), color=line.get_color())
+            if said == (p["max_spm"], p["binding"]):
+                continue
+            said = (p["max_spm"], p["binding"])
             last = p["accuracy_mm"] == right  # the rightmost label goes to the left of its point, inside the axes
-            ax.annotate(_words(p["binding"]), (p["accuracy_mm"], p["max_spm"]), xytext=(-4 if last else 4, -10),
+            error = "" if p.get("handover_error_mm") is None else f" ({p['handover_error_mm']:.3g} mm)"
+            ax.annotate(_words(p["binding"]) + error, (p["accuracy_mm"], p["max_spm"]), xytext=(-4 if last else 4, -10),
                         textcoords="offset points", fontsize=7, color=line.get_color(), ha="right" if last else "left")
+    missing: dict = {}  # accuracies without a rate (per stroke): marked on the bottom edge
+    for p in report["points"]:
+        if p["max_spm"] is None:
+            missing.setdefault(p["accuracy_mm"], []).append(_words(p["stroke"]))
+    bottom = ax.get_ylim()[0]
+    for acc, strokes in missing.items():
+        ax.plot(acc, bottom, "x", color="0.4", clip_on=False)
+        ax.annotate("no rate: " + ", ".join(strokes), (acc, bottom), xytext=(4, 6), textcoords="offset points",
+                    fontsize=7, color="0.4", rotation=90, va="bottom")
     from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter
 
     ax.set_xscale("log")

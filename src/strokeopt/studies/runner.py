@@ -319,6 +319,14 @@ def connected(runner: StudyRunner, tasks: int | None = None):
         client.close()
 
 
+def check_reachable(runner: StudyRunner) -> None:
+    """A scheduler that refuses the connection or is no Dask scheduler, said before a study does any other work
+    (ProblemError, one line; the full connection, its workers and their strokeopt are checked when the study
+    starts). Nothing to check for local workers."""
+    if runner.scheduler is not None:
+        _probe(runner)
+
+
 def _reach(runner: StudyRunner):
     _probe(runner)  # before importing Dask (a second)
     from distributed import Client

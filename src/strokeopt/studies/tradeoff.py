@@ -43,13 +43,20 @@ class TradeoffPoint:
     detail: str = ""
     #: the rate the full simulation confirmed (max_spm is it rounded down to the resolution; None: max_spm)
     confirmed_spm: float | None = None
+    #: the lowest rate above it that was simulated and failed (None: none was, the binding limit is the design's
+    #: or the drive's own bound), the error the simulation found there [m] and why it failed
+    failed_spm: float | None = None
+    failed_error: float | None = None
+    failed_reason: str = ""
 
     def as_dict(self) -> dict:
         confirmed = self.max_spm if self.confirmed_spm is None else self.confirmed_spm
         return {"accuracy_mm": round(self.accuracy * 1e3, 9), "stroke": self.stroke, "max_spm": self.max_spm,
                 "binding": self.binding, "confirmed_spm": None if confirmed is None else round(confirmed, 1),
                 "handover_error_mm": None if self.handover_error is None else self.handover_error * 1e3,
-                "detail": self.detail}
+                "failed_spm": None if self.failed_spm is None else round(self.failed_spm, 1),
+                "failed_error_mm": None if self.failed_error is None else self.failed_error * 1e3,
+                "failed_reason": self.failed_reason, "detail": self.detail}
 
 
 def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step: float = 50.0,
@@ -114,13 +121,14 @@ def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step
             else:
                 fail = (spm, "torque_limit" if sat else "handover_accuracy")
                 break
+        failed = None  # the first failing rate above the highest
         if fail is None:
             max_spm, binding = top, top_binding
         elif prev is None:
-            max_spm, binding = None, fail[1]
+            max_spm, binding, failed = None, fail[1], fail[0]
         else:
-            max_spm = bisect_highest(ok, prev, fail[0], resolution)[0]
-            e_hi, sat_hi = evaluate(min(max_spm + resolution, fail[0]))
+            max_spm, failed = bisect_highest(ok, prev, fail[0], resolution)
+            e_hi, sat_hi = evaluate(failed)
             binding = "torque_limit" if sat_hi else "handover_accuracy"
         if best is not None and (max_spm is None or max_spm < best):
             max_spm = best  # the error stays within a looser accuracy wherever it met a tighter one
@@ -128,7 +136,13 @@ def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step
             max_spm = math.floor(max_spm / resolution) * resolution if max_spm != top else math.floor(top)
             best = max_spm
         err = evaluate(max_spm)[0] if max_spm else None
-        points.append(TradeoffPoint(acc, problem.default_law.name, max_spm, binding, err))
+        if failed is not None and max_spm is not None and failed <= max_spm:
+            failed = None
+        e_f, sat_f = evaluate(failed) if failed is not None else (None, False)
+        why = "" if failed is None else ("torque limit: the torque command passes its limit" if sat_f else
+                                         f"handover accuracy: the simulation gives {e_f * 1e3:.4f} mm")
+        points.append(TradeoffPoint(acc, problem.default_law.name, max_spm, binding, err, failed_spm=failed,
+                                    failed_error=e_f, failed_reason=why))
     return points
 
 
@@ -200,106 +214,174 @@ def _confirm(problem, design, spm: float, acc: float) -> _Trial:
     return _Trial(spm, excess, reason, design, res)
 
 
-def _confirm_min_time(problem, design, ceiling: float | None, acc: float) -> tuple[float, _Trial]:
-    """The rate a ``min_time`` design may claim (its own, or a looser accuracy's lower rate, which bounds
-    it: the design then runs there) and its full simulation there."""
-    top = design.spm if ceiling is None else min(design.spm, ceiling)
-    if top != design.spm:
-        from ..design.result import stroke_from_solutions
-
-        design = replace(design, spm=top, stroke=stroke_from_solutions(problem, top, design.solutions,
-                                                                       design.stroke.label))
-    return top, _confirm(problem, design, top, acc)
-
-
 def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowest: float = 100.0,
-                     start: float | None = None, progress=None) -> list[TradeoffPoint]:
-    """Highest stitch rate with the optimal stroke for each accuracy [m], by ``min_time`` continuation.
+                     start: float | None = None, progress=None, runner=None) -> list[TradeoffPoint]:
+    """Highest stitch rate with the optimal stroke for each accuracy [m], by ``min_time``.
 
-    For each accuracy, loosest first: one ``min_time`` design solve (the highest rate within every
-    design limit and the design's handover error term, :class:`.kernel.ServoErrorTerm`), warm-started
-    from the previous accuracy's; then its full simulation (:func:`handover_accuracy`: table
-    sampling, load forces, the handover window, the torque command). A rate counts only when the
-    full simulation meets the accuracy without the torque command passing its limit: the design's
-    own term is the simulation's error at instants of the handover window, but not its torque command. When the simulation rejects
-    the ``min_time`` design, the rate is searched below it (it bounds every design's rate) with the
-    design of the file's objective at fixed rates, each confirmed the same way (a step down by the
-    simulation's excess; a safeguarded secant to half the resolution). A tighter accuracy never gets a higher rate
-    than a looser one. The motor and pulley are the problem's (``drive.motor``, ``pulley_teeth``),
-    as for the classic law, so the two curves compare strokes on one drive. ``progress(step, text)``
-    is called once per step (a line per solve or simulation).
+    Each accuracy is a task of the study runner (``runner``, :mod:`.runner`; None: in this process, one after the
+    other): one ``min_time`` design solve (the highest rate within every design limit and the design's handover
+    error term, :class:`.kernel.ServoErrorTerm`) from the problem's own rate and stroke (:func:`_min_time`), then
+    its full simulation (:func:`handover_accuracy`: table sampling, load forces, the handover window, the torque
+    command). A rate counts only when the full simulation meets the accuracy without the torque command passing
+    its limit: the design's own term is the simulation's error at instants of the handover window, but not its
+    torque command. When the simulation rejects the ``min_time`` design, the rate is searched below it with the
+    most accurate stroke at fixed rates, each confirmed the same way (a step down by the simulation's excess; a
+    safeguarded secant to the resolution). The tasks do not depend on each other, so an accuracy's answer does not
+    depend on which others are asked. Then, loosest first, a looser accuracy's confirmed design answers every
+    tighter one it meets, and an accuracy whose ``min_time`` found no design is solved again here from the
+    looser accuracy's design; last, a tighter accuracy's rate is given to every looser one below it (its design
+    meets them): a tighter accuracy never gets a higher rate than a looser one. The motor and pulley are the
+    problem's (``drive.motor``, ``pulley_teeth``), as for the classic law, so the two curves compare strokes on
+    one drive. ``progress(step, text)`` is called once per step (a line per solve or simulation; on workers
+    the lines are printed on the workers' standard error).
     """
+    from .runner import run_study
+
+    accuracies = sorted(a * 1e-3 for a in DEFAULT_ACCURACIES_MM) if accuracies is None else sorted(accuracies)
+    spm0 = problem.spm if start is None else start
+    here = runner is None or runner.in_process
+    say = (progress or _quiet) if here else (print_step if progress is not None else _quiet)
+    loosest_first = sorted(accuracies, reverse=True)
+    # the drive's own highest rate (no accuracy held), in this process: it answers every accuracy its error meets
+    own = {}
+    top_point, top, _ = _one_accuracy(problem, math.inf, resolution, lowest, spm0, progress or _quiet)
+    for acc in loosest_first:
+        if top is not None and within_limit(top.result.handover_error, acc):
+            own[acc] = (replace(top_point, accuracy=acc), top, False)
+    tasks = [acc for acc in loosest_first if acc not in own]
+    outcomes = run_study(_accuracy_step, tasks, (problem, resolution, lowest, spm0, say), runner=runner,
+                         chained=False) if tasks else []
+    own.update({o.item: o.row if o.ok else (TradeoffPoint(o.item, "optimal", None, "solver", None, o.error), None,
+                                             False) for o in outcomes})
+    points, confirmed, prev = {}, None, None
+    for acc in loosest_first:
+        point, trial, no_design = own[acc]
+        if confirmed is not None and within_limit(confirmed.result.handover_error, acc):
+            # the looser accuracy's design meets this one too, and its rate bounds this one's
+            looser = points[prev]
+            point, trial = replace(looser, accuracy=acc, detail=looser.detail + f" (the design of {prev * 1e3:g} mm)"), \
+                confirmed
+            if progress is not None:
+                progress(_tag(acc), f"{confirmed.spm:.1f} spm: the design of {prev * 1e3:g} mm meets it "
+                                    f"({confirmed.result.handover_error * 1e3:.4f} mm)")
+        elif no_design and confirmed is not None:  # from the looser design only (the first starts found none)
+            point, trial, _ = _one_accuracy(problem, acc, resolution, lowest, spm0, progress or _quiet, confirmed)
+        points[acc] = point
+        if trial is not None:
+            confirmed, prev = trial, acc
+    best = None  # tightest first: a tighter accuracy's design meets every looser one
+    for acc in accuracies:
+        if best is not None and (points[acc].max_spm is None or points[acc].max_spm < best.max_spm):
+            points[acc] = replace(best, accuracy=acc, detail=best.detail + f" (the design of {best.accuracy * 1e3:g} mm)")
+        elif points[acc].max_spm is not None:
+            best = points[acc]
+    return [points[a] for a in accuracies]
+
+
+def _quiet(step, text) -> None:
+    return None
+
+
+def print_step(step, text) -> None:
+    """A step's line on standard error (what ``strokeopt tradeoff`` prints; on a worker, the worker's)."""
+    import sys
+
+    print(f"tradeoff {step}: {text}", file=sys.stderr, flush=True)
+
+
+def _tag(acc: float) -> str:
+    return f"optimal {acc * 1e3:g} mm" if math.isfinite(acc) else "optimal, no accuracy held"
+
+
+def _accuracy_step(shared, acc: float, warm):
+    """One accuracy of :func:`tradeoff_optimal` (a task): its point, its confirmed trial, whether min_time found
+    no design."""
+    problem, resolution, lowest, spm0, say = shared
+    return _one_accuracy(problem, acc, resolution, lowest, spm0, say), None
+
+
+def _one_accuracy(problem, acc: float, resolution: float, lowest: float, spm0: float, say, looser=None):
+    """The highest confirmed rate at one accuracy: ``(point, confirmed trial or None, min_time found no design)``;
+    ``looser``: a looser accuracy's confirmed trial, the last start of :func:`_min_time`."""
     from ..design.transcription.settings import DesignSettings
     from ..design.solve import solve_design
 
-    accuracies = sorted(a * 1e-3 for a in DEFAULT_ACCURACIES_MM) if accuracies is None else sorted(accuracies)
     base = problem.design or DesignSettings()
-    say = progress or (lambda step, text: None)
-    spm0 = problem.spm if start is None else start
-    warm, ceiling, points = None, None, {}
-    reserve = base.torque_reserve  # carried from accuracy to accuracy
-    confirmed, prev_acc = None, None  # the latest confirmed trial and its accuracy
-    for acc in sorted(accuracies, reverse=True):
-        # the same drive as the classic law: the problem's motor and pulley
-        settings = replace(base, accuracy=acc, motor_choice="fixed", pulley="fixed", torque_reserve=reserve,
-                           rate_bracket=RATE_BRACKET)
-        tag = f"optimal {acc * 1e3:g} mm"
-        if ceiling is not None and ceiling <= 0.0:
-            points[acc] = TradeoffPoint(acc, "optimal", None, "handover_accuracy", None,
-                                        "a looser accuracy has no confirmed rate")
-            continue
-        if confirmed is not None and within_limit(confirmed.result.handover_error, acc):
-            # the looser accuracy's design meets this one too, and its rate bounds this one's
-            looser = points[prev_acc]
-            points[acc] = replace(looser, accuracy=acc, detail=looser.detail + f" (the design of {prev_acc * 1e3:g} mm)")
-            say(tag, f"{confirmed.spm:.1f} spm: the design of {prev_acc * 1e3:g} mm meets it "
-                     f"({confirmed.result.handover_error * 1e3:.4f} mm)")
-            continue
+    reserve = base.torque_reserve
+    # the same drive as the classic law: the problem's motor and pulley
+    settings = replace(base, accuracy=acc, motor_choice="fixed", pulley="fixed", torque_reserve=reserve,
+                       rate_bracket=RATE_BRACKET)
+    tag = _tag(acc)
+    try:
+        d = _min_time(problem, spm0, settings, looser, lambda text: say(tag, text))
+    except SolverError as exc:
+        say(tag, f"min_time: no design ({exc.reason.splitlines()[0]})")
+        return TradeoffPoint(acc, "optimal", None, _binding_of(exc.reason), None, exc.reason), None, True
+    warm = d
+    binding = _binding_of(d.notes[0].split("bound by:", 1)[-1])
+    say(tag, f"min_time {d.spm:.1f} spm ({binding}); full simulation")
+    top, hi = d.spm, _confirm(problem, d, d.spm, acc)
+    for _ in range(RESERVE_STEPS):
+        res = hi.result
+        if hi.ok or not res.torque_limited or res.handover_error > acc:
+            break
+        # the loop's torque command passes the limit the rigid load meets: keep the excess in reserve
+        reserve = _more_reserve(reserve, res)
+        settings = replace(settings, torque_reserve=reserve)
         try:
-            d = solve_design(problem, objective="min_time", spm=spm0, settings=settings, warm_start=warm)
+            d = solve_design(problem, objective="min_time", spm=d.spm, settings=settings, warm_start=d)
         except SolverError as exc:
-            say(tag, f"min_time: no design ({exc.reason.splitlines()[0]})")
-            points[acc] = TradeoffPoint(acc, "optimal", None, _binding_of(exc.reason), None, exc.reason)
-            ceiling = 0.0  # a design of a tighter accuracy would meet this one
-            continue
-        warm, spm0 = d, d.spm
-        binding = _binding_of(d.notes[0].split("bound by:", 1)[-1])
-        say(tag, f"min_time {d.spm:.1f} spm ({binding}); full simulation")
-        top, hi = _confirm_min_time(problem, d, ceiling, acc)
-        for _ in range(RESERVE_STEPS):
-            res = hi.result
-            if hi.ok or not res.torque_limited or res.handover_error > acc:
-                break
-            # the loop's torque command passes the limit the rigid load meets: keep the excess in reserve
-            reserve = _more_reserve(reserve, res)
-            settings = replace(settings, torque_reserve=reserve)
-            try:
-                d = solve_design(problem, objective="min_time", spm=d.spm, settings=settings, warm_start=d)
-            except SolverError as exc:
-                say(tag, f"min_time with {100 * reserve:.1f} % torque reserve: no design ({exc.reason.splitlines()[0]})")
-                break
-            warm, spm0, binding = d, d.spm, "torque_limit"
-            say(tag, f"min_time {d.spm:.1f} spm with {100 * reserve:.1f} % of the torque limit in reserve for the "
-                     "loop; full simulation")
-            top, hi = _confirm_min_time(problem, d, ceiling, acc)
-        if hi.ok:
-            found, lo = top, hi
-        else:
-            lo, hi = _search_below(problem, hi, settings, acc, resolution, lowest, warm, lambda text: say(tag, text))
-            found = None if lo is None else lo.spm
-            binding = _binding_of(hi.reason)  # what fails just above the highest confirmed rate
-        if found is None:
-            points[acc] = TradeoffPoint(acc, "optimal", None, binding, None, f"at {hi.spm:.1f} spm: {hi.reason}")
-            ceiling = 0.0
-            continue
-        max_spm = math.floor(found / resolution + 1e-9) * resolution
-        error = lo.result.handover_error
-        detail = (f"min_time {d.spm:.1f} spm; at {found:.1f} spm the full simulation gives {error * 1e3:.4f} mm"
-                  + ("" if hi.ok else f"; above, at {hi.spm:.1f} spm: {hi.reason}"))
-        points[acc] = TradeoffPoint(acc, "optimal", max_spm, binding, error, detail, confirmed_spm=found)
-        ceiling, confirmed, prev_acc = found, lo, acc
-        say(tag, f"the highest confirmed rate: {found:.1f} spm ({error * 1e3:.4f} mm)")
-    return [points[a] for a in accuracies]
+            say(tag, f"min_time with {100 * reserve:.1f} % torque reserve: no design ({exc.reason.splitlines()[0]})")
+            break
+        warm, binding = d, "torque_limit"
+        say(tag, f"min_time {d.spm:.1f} spm with {100 * reserve:.1f} % of the torque limit in reserve for the "
+                 "loop; full simulation")
+        top, hi = d.spm, _confirm(problem, d, d.spm, acc)
+    if hi.ok:
+        found, lo = top, hi
+    else:
+        lo, hi = _search_below(problem, hi, settings, acc, resolution, lowest, warm, lambda text: say(tag, text))
+        found = None if lo is None else lo.spm
+        binding = _binding_of(hi.reason)  # what fails just above the highest confirmed rate
+    if found is None:
+        return (TradeoffPoint(acc, "optimal", None, binding, None, f"at {hi.spm:.1f} spm: {hi.reason}", **_failed(hi)),
+                None, False)
+    max_spm = math.floor(found / resolution + 1e-9) * resolution
+    error = lo.result.handover_error
+    detail = (f"min_time {d.spm:.1f} spm; at {found:.1f} spm the full simulation gives {error * 1e3:.4f} mm"
+              + ("" if hi.ok else f"; above, at {hi.spm:.1f} spm: {hi.reason}"))
+    say(tag, f"the highest confirmed rate: {found:.1f} spm ({error * 1e3:.4f} mm)")
+    return (TradeoffPoint(acc, "optimal", max_spm, binding, error, detail, confirmed_spm=found,
+                          **({} if hi.ok else _failed(hi))), lo, False)
+
+
+def _min_time(problem, spm0: float, settings, looser: _Trial | None, say):
+    """The ``min_time`` design of one accuracy, from the first of two starts that gives one: the problem's own
+    rate and stroke (the accuracy held once a solution breaks it), then the same with the accuracy held from the
+    first solve (where the rate a first solve without it finds is one where no stroke meets it); neither depends on
+    which other accuracies are asked. With ``looser`` (where both found none): from the design a looser accuracy
+    confirmed alone (it holds a looser accuracy at a higher rate; the rate comes down from it)."""
+    from ..design.solve import solve_design
+
+    starts = [(f"from {spm0:g} spm", lambda: dict(spm=spm0)),
+              (f"from {spm0:g} spm with the accuracy held from the first solve",
+               lambda: dict(spm=spm0, hold_accuracy=True))]
+    if looser is not None:  # the first two found no design (tradeoff_optimal): this start alone
+        starts = [(f"from the design confirmed at {looser.spm:.1f} spm for a looser accuracy",
+                   lambda: dict(spm=looser.spm, warm_start=looser.design, hold_accuracy=True))]
+    for k, (where, start) in enumerate(starts):
+        try:
+            return solve_design(problem, objective="min_time", settings=settings, **start())
+        except SolverError as exc:
+            if k == len(starts) - 1:
+                raise
+            say(f"min_time {where}: no design ({exc.reason.splitlines()[0]}); again {starts[k + 1][0]}")
+
+
+def _failed(trial: _Trial) -> dict:
+    """The failed-rate fields of a :class:`TradeoffPoint` from a rejected trial."""
+    error = None if trial.result is None else trial.result.handover_error
+    return {"failed_spm": trial.spm, "failed_error": error, "failed_reason": trial.reason.splitlines()[0]}
 
 
 def _more_reserve(reserve: float, res) -> float:
@@ -384,10 +466,11 @@ def _search_below(problem, hi: _Trial, settings, acc: float, resolution: float, 
 
 
 def tradeoff(problem, accuracies=None, *, strokes: str = "both", resolution: float = 10.0, step: float = 50.0,
-             progress=None) -> dict:
+             progress=None, runner=None) -> dict:
     """The report of ``strokeopt tradeoff``: for each required handover accuracy the highest
     stitch rate with the problem's classic law and with the optimal stroke, and the binding limit.
-    ``progress(step, text)``: called with a line at every step (a simulated rate, a design solve)."""
+    ``progress(step, text)``: called with a line at every step (a simulated rate, a design solve).
+    ``runner``: where the optimal stroke's accuracies are solved (:func:`tradeoff_optimal`)."""
     if strokes not in ("both", "classic", "optimal"):
         raise ProblemError("--strokes", "", f"{strokes!r} is not one of both, classic, optimal")
     points = []
@@ -395,7 +478,7 @@ def tradeoff(problem, accuracies=None, *, strokes: str = "both", resolution: flo
         points += tradeoff_classic(problem, accuracies, resolution=resolution, step=max(step, resolution),
                                    progress=progress)
     if strokes in ("both", "optimal"):
-        points += tradeoff_optimal(problem, accuracies, resolution=resolution, progress=progress)
+        points += tradeoff_optimal(problem, accuracies, resolution=resolution, progress=progress, runner=runner)
     return {"problem": problem.name, "motor": problem.drive.motor, "pulley_teeth": problem.pulley_teeth,
             "law": problem.default_law.label, "resolution_spm": resolution, "torque_basis": TORQUE_BASIS,
             "points": [p.as_dict() for p in points]}
