@@ -195,9 +195,10 @@ def cmd_tradeoff(args) -> int:
     if not lo <= args.resolution <= hi:
         raise ProblemError("--resolution", "", f"must lie in [{lo:g}, {hi:g}] spm (finer than the rate settles to, "
                                                f"or coarser than the search's span), got {args.resolution!r}")
-    runner = None  # the classic law alone starts no worker
-    if args.strokes != "classic":
-        runner = study_runner(args.workers, args.scheduler, tasks=len(accuracies or DEFAULT_ACCURACIES_MM))
+    runner = study_runner(args.workers, args.scheduler, tasks=len(accuracies or DEFAULT_ACCURACIES_MM))
+    if args.strokes == "classic":
+        runner = None  # the classic law alone starts no worker (the options were still checked)
+    else:
         check_reachable(runner)  # an unreachable scheduler: before the classic law's simulations
     report = tradeoff(problem, accuracies, strokes=args.strokes, resolution=args.resolution,
                       progress=None if args.json else print_step, runner=runner)

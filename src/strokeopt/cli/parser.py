@@ -50,13 +50,15 @@ def _stroke_options(p: argparse.ArgumentParser, sweep: bool = False, law: bool =
         p.add_argument("--chi", type=float, help="shape parameter chi of the modified sine law (0.001 <= chi <= 0.25)")
 
 
-def _study_runner_options(p: argparse.ArgumentParser, study: str) -> None:
-    """--workers and --scheduler: where a study's tasks run (studies/runner.py)."""
+def _study_runner_options(p: argparse.ArgumentParser, study: str,
+                          spread: str = "each solving a contiguous run of the points warm-started within the run"
+                          ) -> None:
+    """--workers and --scheduler: where a study's tasks run (studies/runner.py); ``spread``: how the tasks share
+    the workers."""
     p.add_argument("--workers", metavar="N",
                    help=f"worker processes for {study}, 1 to 256: 1 solves in this process one after the other (the "
-                        "reference answer); N > 1 starts a Dask LocalCluster of N processes, each solving a "
-                        "contiguous run of the points warm-started within the run (default: one per core, or "
-                        "$STROKEOPT_SCHEDULER when set)")
+                        f"reference answer); N > 1 starts a Dask LocalCluster of N processes, {spread} (default: one "
+                        "per core, or $STROKEOPT_SCHEDULER when set)")
     p.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                    help=f"run {study} on the workers of this Dask scheduler (each with strokeopt installed, started "
                         "with 'dask worker tcp://HOST:PORT --nthreads 1'); the same as setting STROKEOPT_SCHEDULER. "
@@ -306,7 +308,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="which strokes to compare (default both)")
     p.add_argument("--resolution", type=float, default=10.0, help="stitch-rate resolution of the search [spm] (default 10)")
     _drive_options(p, "(its motor and pulley only: the stroke is solved again at every rate)")
-    _study_runner_options(p, "the optimal stroke's accuracies (each a task, solved from its own start)")
+    _study_runner_options(p, "the optimal stroke's accuracies",
+                          "each taking the next accuracy as it frees up; every accuracy starts from the problem's "
+                          "own rate and stroke, so the table is the same on any number of workers")
     _plot_option(p, "tradeoff_<strokes>_<law>_<motor>")
     p.set_defaults(run=cmd_tradeoff)
     _report_parsers(sub, problem)

@@ -123,11 +123,16 @@ def tradeoff_text(report: dict) -> str:
     """The text of ``strokeopt tradeoff`` from the report of :func:`~strokeopt.studies.tradeoff.tradeoff`."""
     head = (f"{report['problem']}: highest stitch rate for a required handover accuracy "
             f"(motor {report['motor']}, {report['pulley_teeth']}-tooth pulley; classic law {report['law']}; "
-            f"rates to {report['resolution_spm']:g} spm)\n{report['torque_basis']}")
+            f"rates to {report['resolution_spm']:g} spm)\n{report['torque_basis']}\n"
+            "confirmed: the full servo simulation meets the accuracy there (within the design's check tolerance) "
+            "with the torque command within its limit; rejected: the rate above that failed (its error where it "
+            "was simulated; '-': no higher rate was tried, the binding limit is the design's own)\n"
+            "binding limit: torque_limit = the servo's torque command, peak_torque / rms_torque = the design's "
+            "rigid-load checks, handover_accuracy = the simulated error")
     return head + "\n\n" + format_table(report["points"], [
         ("accuracy_mm", "accuracy mm"), ("stroke", "stroke"), ("max_spm", "max spm"), ("binding", "binding limit"),
-        ("confirmed_spm", "confirmed at spm"), ("handover_error_mm", "its error mm"),
-        ("failed_spm", "failed at spm"), ("failed_error_mm", "its error mm")])
+        ("confirmed_spm", "confirmed at spm"), ("handover_error_mm", "error there mm"),
+        ("failed_spm", "rejected at spm"), ("failed_error_mm", "error at rejected mm")])
 
 
 def _words(name: str) -> str:
@@ -164,20 +169,20 @@ def plot_tradeoff(report: dict, path: str | Path | None = None):
             ax.plot(p["accuracy_mm"], p["max_spm"], markers.get(p["binding"], "x"), color=line.get_color())
             if said == (p["max_spm"], p["binding"]):
                 continue
+            above = said is not None and said[0] == p["max_spm"]  # beside a label at the same rate: above the line
             said = (p["max_spm"], p["binding"])
             last = p["accuracy_mm"] == right  # the rightmost label goes to the left of its point, inside the axes
             error = "" if p.get("handover_error_mm") is None else f" ({p['handover_error_mm']:.3g} mm)"
-            ax.annotate(_words(p["binding"]) + error, (p["accuracy_mm"], p["max_spm"]), xytext=(-4 if last else 4, -10),
+            ax.annotate(_words(p["binding"]) + error, (p["accuracy_mm"], p["max_spm"]),
+                        xytext=(-4 if last else 4, 5 if above else -10),
                         textcoords="offset points", fontsize=7, color=line.get_color(), ha="right" if last else "left")
-    missing: dict = {}  # accuracies without a rate (per stroke): marked on the bottom edge
+    missing: dict = {}  # accuracies without a rate (per stroke): one line in the upper left corner
     for p in report["points"]:
         if p["max_spm"] is None:
-            missing.setdefault(p["accuracy_mm"], []).append(_words(p["stroke"]))
-    bottom = ax.get_ylim()[0]
-    for acc, strokes in missing.items():
-        ax.plot(acc, bottom, "x", color="0.4", clip_on=False)
-        ax.annotate("no rate: " + ", ".join(strokes), (acc, bottom), xytext=(4, 6), textcoords="offset points",
-                    fontsize=7, color="0.4", rotation=90, va="bottom")
+            missing.setdefault(_words(p["stroke"]), []).append(f"{p['accuracy_mm']:g}")
+    if missing:
+        ax.text(0.01, 0.98, "no rate: " + "; ".join(f"{k} at {', '.join(v)} mm" for k, v in missing.items()),
+                transform=ax.transAxes, va="top", fontsize=8, color="0.3")
     from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter
 
     ax.set_xscale("log")
@@ -188,7 +193,8 @@ def plot_tradeoff(report: dict, path: str | Path | None = None):
     ax.margins(x=0.06)
     ax.set_xlabel("required handover accuracy [mm]")
     ax.set_ylabel("highest stitch rate [spm]")
-    drive = [f"classic law {report['law']}" if report.get("law") else "",
+    classic = any(p["stroke"] != "optimal" for p in report["points"])
+    drive = [f"classic law {report['law']}" if report.get("law") and classic else "",
              f"motor {report['motor']}, {report['pulley_teeth']}-tooth pulley" if report.get("motor") else ""]
     ax.set_title(f"{report['problem']}: what accuracy costs in stitch rate"
                  + (f"\n({'; '.join(d for d in drive if d)})" if any(drive) else ""), fontsize=10)

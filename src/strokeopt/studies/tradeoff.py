@@ -321,6 +321,8 @@ def _one_accuracy(problem, acc: float, resolution: float, lowest: float, spm0: f
     binding = _binding_of(d.notes[0].split("bound by:", 1)[-1])
     say(tag, f"min_time {d.spm:.1f} spm ({binding}); full simulation")
     top, hi = d.spm, _confirm(problem, d, d.spm, acc)
+    if not hi.ok:
+        say(tag, f"{top:.1f} spm: {hi.reason}")
     for _ in range(RESERVE_STEPS):
         res = hi.result
         if hi.ok or not res.torque_limited or res.handover_error > acc:
@@ -337,6 +339,8 @@ def _one_accuracy(problem, acc: float, resolution: float, lowest: float, spm0: f
         say(tag, f"min_time {d.spm:.1f} spm with {100 * reserve:.1f} % of the torque limit in reserve for the "
                  "loop; full simulation")
         top, hi = d.spm, _confirm(problem, d, d.spm, acc)
+        if not hi.ok:
+            say(tag, f"{top:.1f} spm: {hi.reason}")
     if hi.ok:
         found, lo = top, hi
     else:
