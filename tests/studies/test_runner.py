@@ -170,14 +170,18 @@ def test_a_failing_rate_is_reported_with_its_rate_and_the_others_kept(capsys, mo
         return real(problem, spm=spm, **kw)
 
     monkeypatch.setattr(sweeps, "solve_checked", flaky)
+    rows, err = _sweep_with_a_failure(capsys, [True, False, True, True])
+    assert rows[1]["task_failed"] and rows[1]["reason"] == "task failed: RuntimeError: the linear solver ran out of memory"
+    assert "strokeopt: failed: the task of 33 spm: task failed: RuntimeError: the linear solver ran out of memory" in err
+
+
+def _sweep_with_a_failure(capsys, feasible: list) -> tuple[list, str]:
+    """The rows and stderr of a one-worker sweep of the known optimum in which a task fails (exit 1)."""
     code = main(["solve", str(MIN_JERK), *SWEEP, "--json", "--plot", "none", "--workers", "1"])
     captured = capsys.readouterr()
     rows = json.loads(captured.out)["rows"]
-    assert code == 1
-    assert [r["feasible"] for r in rows] == [True, False, True, True]
-    assert rows[1]["task_failed"] and rows[1]["reason"] == "task failed: RuntimeError: the linear solver ran out of memory"
-    assert "strokeopt: failed: the task of 33 spm: task failed: RuntimeError: the linear solver ran out of memory" \
-        in captured.err
+    assert code == 1 and [r["feasible"] for r in rows] == feasible
+    return rows, captured.err
 
 
 def test_a_failing_verification_is_reported_with_its_rate_and_the_next_rate_starts_from_its_design(capsys, monkeypatch):
@@ -199,11 +203,7 @@ def test_a_failing_verification_is_reported_with_its_rate_and_the_next_rate_star
 
     monkeypatch.setattr(sweeps, "verify_design", flaky)
     monkeypatch.setattr(sweeps, "solve_checked", watched)
-    code = main(["solve", str(MIN_JERK), *SWEEP, "--json", "--plot", "none", "--workers", "1"])
-    captured = capsys.readouterr()
-    rows = json.loads(captured.out)["rows"]
-    assert code == 1
-    assert [r["feasible"] for r in rows] == [True, True, False, True]
+    rows, _ = _sweep_with_a_failure(capsys, [True, True, False, True])
     assert rows[2]["reason"] == "task failed: RuntimeError: the integrator stopped"
     assert starts == [None, 30.0, 33.0, 36.0]  # the rate after the failed verification starts from its design
 
