@@ -6,11 +6,11 @@ is now one line naming the file, the field, the value and the range, exit code 2
 from __future__ import annotations
 
 import json
-import math
 
 import pytest
 
 from strokeopt.cli.main import main
+from input_cases import finite_json
 
 FIXED = ["--set", 'design.motor_choice="fixed"', "--set", 'design.pulley="fixed"']
 
@@ -29,17 +29,6 @@ NULLABLE = {"direction", "law", "motor", "belt", "reason", "binding", "binding_l
             # events of the contact model that did not happen (contact/events.py: None where an event does not)
             "impact_velocity_m_s", "impact_angle_deg", "lag_onset_angle_deg", "lag_end_angle_deg", "min_gap_N_mm",
             "release_angle_deg", "premature_release", "gap_N_mm"}
-
-
-def finite_json(value, key=None) -> bool:
-    """No NaN or infinity anywhere, and no null number (a null outside :data:`NULLABLE`)."""
-    if isinstance(value, dict):
-        return all(finite_json(v, k) for k, v in value.items())
-    if isinstance(value, list):
-        return all(finite_json(v, key) for v in value)
-    if value is None:
-        return key in NULLABLE
-    return not isinstance(value, float) or math.isfinite(value)
 
 
 # ---------------------------------------------------------------- silent extremes (issue 14: accepted before)
@@ -233,4 +222,4 @@ def test_extreme_but_plausible_inputs_give_finite_answers(capsys, reference_path
     code = main([argv[0], str(reference_path), *argv[1:], "--plot", "none", "--json"])
     out = capsys.readouterr().out
     assert code in (0, 1)
-    assert finite_json(json.loads(out))
+    assert finite_json(json.loads(out), NULLABLE)

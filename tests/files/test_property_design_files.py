@@ -14,6 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from strokeopt.cli.main import main
+from input_cases import field_paths, mutated
 from test_property_inputs import SWAPS, _no_bad_numbers
 
 from conftest import REFERENCE
@@ -27,15 +28,9 @@ def design_data(tmp_path_factory) -> dict:
     return json.loads((out / "design.json").read_text(encoding="utf-8"))
 
 
-def _paths(node, prefix=(), depth=0):
-    """The design file's keys and array elements, down to the move rows (not every collocation number)."""
-    items = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
-    for key, value in items:
-        if key in ("cam_table", "comparison") or (isinstance(key, int) and key > 2):
-            continue
-        yield prefix + (key,)
-        if depth < 3:
-            yield from _paths(value, prefix + (key,), depth + 1)
+def _skipped(key, depth) -> bool:
+    """The design file's keys and array elements down to the move rows (not every collocation number)."""
+    return key in ("cam_table", "comparison") or (isinstance(key, int) and key > 2)
 
 
 def _run(argv) -> tuple[int, str, str]:
@@ -64,29 +59,9 @@ def _one_answer(code, out, err, json_mode=True):
             assert _no_bad_numbers(out), out
 
 
-@st.composite
-def mutated_design(draw, base):
-    data = json.loads(json.dumps(base))
-    paths = sorted(_paths(data), key=repr)
-    for _ in range(draw(st.integers(1, 3))):
-        path = draw(st.sampled_from(paths))
-        node = data
-        try:
-            for key in path[:-1]:
-                node = node[key]
-            value = node[path[-1]]
-        except (KeyError, IndexError, TypeError):
-            continue
-        op = draw(st.sampled_from(["scale", "sign", "swap", "delete"]))
-        if op == "scale" and isinstance(value, (int, float)) and not isinstance(value, bool):
-            node[path[-1]] = value * 10.0 ** draw(st.sampled_from([-30, -3, -1, 1, 3, 30]))
-        elif op == "sign" and isinstance(value, (int, float)) and not isinstance(value, bool):
-            node[path[-1]] = -value
-        elif op == "swap":
-            node[path[-1]] = draw(st.sampled_from(SWAPS[:4] + [None, 0, -1, 1e308]))
-        elif op == "delete":
-            del node[path[-1]]
-    return data
+def mutated_design(base):
+    return mutated(base, sorted(field_paths(base, skip=_skipped, max_depth=3), key=repr),
+                   operations=("scale", "sign", "swap", "delete"), swaps=SWAPS[:4] + [None, 0, -1, 1e308])
 
 
 @pytest.mark.slow  # 300 design files, each read by a command

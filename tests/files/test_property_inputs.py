@@ -22,22 +22,15 @@ import pytest
 
 from strokeopt import ProblemError, SolverError, load_problem
 from strokeopt.cli.main import main
-from test_inputs import finite_json
+from input_cases import field_paths, finite_json, mutated
+from test_inputs import NULLABLE
 
 from conftest import REFERENCE
 
 BASE = tomllib.loads(REFERENCE.read_text(encoding="utf-8"))
 
 
-def _paths(node, prefix=()):
-    """Every key and array element of the reference problem, as a path of keys and indices."""
-    items = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
-    for key, value in items:
-        yield prefix + (key,)
-        yield from _paths(value, prefix + (key,))
-
-
-PATHS = sorted(_paths(BASE), key=repr)
+PATHS = sorted(field_paths(BASE), key=repr)
 
 
 def _toml_value(value) -> str:
@@ -59,49 +52,19 @@ def to_toml(data: dict) -> str:
     return "\n".join(f"{json.dumps(k)} = {_toml_value(v)}" for k, v in data.items()) + "\n"
 
 
-def _parent(data, path):
-    node = data
-    for key in path[:-1]:
-        node = node[key]
-    return node
-
-
 SWAPS = ["abc", True, [1.0, 2.0], {"x": 1}, 0, -1, 1e308, 5e-324, float("nan"), float("inf")]
 
 
-@st.composite
-def mutated_problem(draw):
-    data = json.loads(json.dumps(BASE))
-    for _ in range(draw(st.integers(1, 3))):
-        path = draw(st.sampled_from(PATHS))
-        try:
-            parent = _parent(data, path)
-            value = parent[path[-1]]
-        except (KeyError, IndexError, TypeError):
-            continue  # an earlier mutation removed or replaced it
-        op = draw(st.sampled_from(["scale", "sign", "swap", "delete", "misspell", "truncate"]))
-        if op == "scale" and isinstance(value, (int, float)) and not isinstance(value, bool):
-            k = draw(st.sampled_from([-300, -30, -12, -6, -3, -1, 1, 3, 6, 12, 30, 300]))
-            scaled = value * 10.0**k
-            parent[path[-1]] = int(scaled) if isinstance(value, int) and abs(scaled) < 2**63 and k > 0 else scaled
-        elif op == "sign" and isinstance(value, (int, float)) and not isinstance(value, bool):
-            parent[path[-1]] = -value
-        elif op == "swap":
-            parent[path[-1]] = draw(st.sampled_from(SWAPS))
-        elif op == "delete":
-            del parent[path[-1]]
-        elif op == "misspell" and isinstance(parent, dict):
-            parent[path[-1] + draw(st.sampled_from(["x", "_", "s"]))] = parent.pop(path[-1])
-        elif op == "truncate" and isinstance(value, list):
-            parent[path[-1]] = value[: draw(st.integers(0, max(len(value) - 1, 0)))]
-    return data
+def mutated_problem():
+    return mutated(BASE, PATHS, scales=(-300, -30, -12, -6, -3, -1, 1, 3, 6, 12, 30, 300), swaps=SWAPS,
+                   whole_numbers=True)
 
 
 def _no_bad_numbers(text: str) -> bool:
     def refuse(constant):
         raise ValueError(f"{constant} in the JSON")
 
-    return finite_json(json.loads(text, parse_constant=refuse))
+    return finite_json(json.loads(text, parse_constant=refuse), NULLABLE)
 
 
 @pytest.mark.slow  # 300 mutated problem files through the command line

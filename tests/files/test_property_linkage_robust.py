@@ -22,6 +22,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from test_property_design_files import _one_answer, _run
+from input_cases import field_paths, mutated
 from test_property_inputs import SWAPS, to_toml
 
 from conftest import REFERENCE, ROOT
@@ -30,46 +31,13 @@ LOOM = ROOT / "problems" / "loom_beatup_sixbar.toml"
 LOOM_DATA = tomllib.loads(LOOM.read_text(encoding="utf-8"))
 
 
-def _paths(node, prefix=()):
-    items = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
-    for key, value in items:
-        yield prefix + (key,)
-        yield from _paths(value, prefix + (key,))
-
-
 #: Every field of the file, [synthesis] and a link's cg_on_line included.
-LOOM_PATHS = sorted(_paths(LOOM_DATA), key=repr)
+LOOM_PATHS = sorted(field_paths(LOOM_DATA), key=repr)
 
 
-@st.composite
-def mutated_linkage(draw) -> dict:
-    data = json.loads(json.dumps(LOOM_DATA))
-    for _ in range(draw(st.integers(1, 3))):
-        path = draw(st.sampled_from(LOOM_PATHS))
-        parent = data
-        try:
-            for key in path[:-1]:
-                parent = parent[key]
-            value = parent[path[-1]]
-        except (KeyError, IndexError, TypeError):
-            continue  # an earlier mutation removed or replaced it
-        op = draw(st.sampled_from(["scale", "sign", "swap", "delete", "misspell", "truncate"]))
-        number = isinstance(value, (int, float)) and not isinstance(value, bool)
-        if op == "scale" and number:
-            k = draw(st.sampled_from([-300, -30, -6, -3, -1, 1, 3, 6, 30, 300]))
-            scaled = value * 10.0**k
-            parent[path[-1]] = int(scaled) if isinstance(value, int) and abs(scaled) < 2**63 and k > 0 else scaled
-        elif op == "sign" and number:
-            parent[path[-1]] = -value
-        elif op == "swap":
-            parent[path[-1]] = draw(st.sampled_from(SWAPS))
-        elif op == "delete":
-            del parent[path[-1]]
-        elif op == "misspell" and isinstance(parent, dict):
-            parent[path[-1] + draw(st.sampled_from(["x", "_", "s"]))] = parent.pop(path[-1])
-        elif op == "truncate" and isinstance(value, list):
-            parent[path[-1]] = value[: draw(st.integers(0, max(len(value) - 1, 0)))]
-    return data
+def mutated_linkage():
+    return mutated(LOOM_DATA, LOOM_PATHS, scales=(-300, -30, -6, -3, -1, 1, 3, 6, 30, 300), swaps=SWAPS,
+                   whole_numbers=True)
 
 
 def test_the_generator_writes_the_linkage_file_back():

@@ -18,7 +18,6 @@ from __future__ import annotations
 import contextlib
 import io
 import json
-import math
 import re
 
 import pytest
@@ -26,6 +25,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from strokeopt.cli.main import main
+from input_cases import field_paths, finite_json, mutated
 
 from conftest import REFERENCE
 
@@ -68,40 +68,14 @@ def unrendered_figures():
         yield
 
 
-def _paths(node, prefix=(), depth=0):
-    items = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
-    for key, value in items:
-        if (depth == 0 and key not in KEYS) or (isinstance(key, int) and key > 1):
-            continue
-        yield prefix + (key,)
-        if depth < 2:
-            yield from _paths(value, prefix + (key,), depth + 1)
+def _skipped(key, depth) -> bool:
+    """The design's fields the parts and compare read (:data:`KEYS`), and the first two rows of each array."""
+    return (depth == 0 and key not in KEYS) or (isinstance(key, int) and key > 1)
 
 
-@st.composite
-def mutated_design(draw, base) -> dict:
-    data = json.loads(json.dumps(base))
-    paths = sorted(_paths(data), key=repr)
-    for _ in range(draw(st.integers(0, 2))):
-        path = draw(st.sampled_from(paths))
-        node = data
-        try:
-            for key in path[:-1]:
-                node = node[key]
-            value = node[path[-1]]
-        except (KeyError, IndexError, TypeError):
-            continue
-        op = draw(st.sampled_from(["scale", "sign", "swap", "delete"]))
-        number = isinstance(value, (int, float)) and not isinstance(value, bool)
-        if op == "scale" and number:
-            node[path[-1]] = value * 10.0 ** draw(st.sampled_from([-30, -3, -1, 1, 3, 30]))
-        elif op == "sign" and number:
-            node[path[-1]] = -value
-        elif op == "swap":
-            node[path[-1]] = draw(st.sampled_from(SWAPS))
-        elif op == "delete":
-            del node[path[-1]]
-    return data
+def mutated_design(base):
+    return mutated(base, sorted(field_paths(base, skip=_skipped, max_depth=2), key=repr), count=(0, 2),
+                   operations=("scale", "sign", "swap", "delete"), swaps=SWAPS)
 
 
 NUMBER_TEXTS = st.sampled_from(["1e-4", "1e-6", "0", "-1", "nan", "inf", "abc", "", "1e308", "5e-324"])
@@ -128,16 +102,6 @@ def _run(argv) -> tuple[int, str, str]:
     return code, out.getvalue(), err.getvalue()
 
 
-def _finite(value, key=None) -> bool:
-    if isinstance(value, dict):
-        return all(_finite(v, k) for k, v in value.items())
-    if isinstance(value, list):
-        return all(_finite(v, key) for v in value)
-    if value is None:
-        return key in NULLABLE
-    return not isinstance(value, float) or math.isfinite(value)
-
-
 def _answered_once(code, out, err, json_mode: bool, page) -> None:
     """The property (module docstring)."""
     assert code in (0, 1, 2), err
@@ -153,10 +117,17 @@ def _answered_once(code, out, err, json_mode: bool, page) -> None:
         assert isinstance(data, dict) and data.get("status"), out
         if code != 0:
             assert data["status"] != "ok" and data.get("message"), out
-        assert _finite(data), out
+        assert finite_json(data, NULLABLE), out
     if code == 0:
         html = page.read_text(encoding="utf-8")
         assert not re.search(r">\s*(nan|NaN|None|null|inf)\s*<", html), re.findall(r".{80}>\s*(?:nan|None)\s*<", html)
+
+
+def _drawn_design(data, designs, tmp_path) -> str:
+    """A mutated design drawn, and where it is: a JSON file mostly, else a missing file, a directory or a broken file."""
+    mutant = data.draw(mutated_design(designs["data"]), "design")
+    kind = data.draw(st.sampled_from(["json"] * 8 + ["missing", "directory", "broken"]), "file")
+    return _design_path(tmp_path, mutant, kind)
 
 
 def _design_path(tmp_path, data, kind) -> str:
@@ -175,12 +146,11 @@ def _design_path(tmp_path, data, kind) -> str:
                                  HealthCheck.data_too_large])
 @given(data=st.data())
 def test_report_of_any_design_file_and_options_answers_or_refuses_in_one_line(tmp_path, designs, data):
-    mutant = data.draw(mutated_design(designs["data"]), "design")
-    kind = data.draw(st.sampled_from(["json"] * 8 + ["missing", "directory", "broken"]), "file")
+    design = _drawn_design(data, designs, tmp_path)
     json_mode = data.draw(st.sampled_from([True, True, True, False]), "json")
     out = data.draw(OUT, "out")
     page = tmp_path / out if out not in ("", ".") else tmp_path
-    argv = ["report", str(REFERENCE), "--design", _design_path(tmp_path, mutant, kind), "--out", str(page),
+    argv = ["report", str(REFERENCE), "--design", design, "--out", str(page),
             *data.draw(SCENE, "scene"), *data.draw(TOLERANCES, "tolerances"), *data.draw(REPORT_EXTRA, "extra")]
     _answered_once(*_run(argv + (["--json"] if json_mode else [])), json_mode, page)
 
@@ -191,9 +161,7 @@ def test_report_of_any_design_file_and_options_answers_or_refuses_in_one_line(tm
                                  HealthCheck.data_too_large])
 @given(data=st.data())
 def test_compare_of_any_design_files_and_options_answers_or_refuses_in_one_line(tmp_path, designs, data):
-    mutant = data.draw(mutated_design(designs["data"]), "design")
-    kind = data.draw(st.sampled_from(["json"] * 8 + ["missing", "directory", "broken"]), "file")
-    first = _design_path(tmp_path, mutant, kind)
+    first = _drawn_design(data, designs, tmp_path)
     others = data.draw(st.sampled_from([[str(designs["other"])]] * 4 + [[], [first], [str(tmp_path / "gone.json")],
                                         [str(designs["other"]), str(designs["other"])]]), "others")
     json_mode = data.draw(st.sampled_from([True, True, True, False]), "json")
