@@ -218,7 +218,8 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
                      start: float | None = None, progress=None, runner=None) -> list[TradeoffPoint]:
     """Highest stitch rate with the optimal stroke for each accuracy [m], by ``min_time``.
 
-    Each accuracy is a task of the study runner (``runner``, :mod:`.runner`; None: in this process, one after the
+    First, in this process, the drive's own highest rate (``min_time`` with no accuracy held, confirmed as below):
+    it answers every accuracy its simulated error meets. Each other accuracy is a task of the study runner (``runner``, :mod:`.runner`; None: in this process, one after the
     other): one ``min_time`` design solve (the highest rate within every design limit and the design's handover
     error term, :class:`.kernel.ServoErrorTerm`) from the problem's own rate and stroke (:func:`_min_time`), then
     its full simulation (:func:`handover_accuracy`: table sampling, load forces, the handover window, the torque
