@@ -234,6 +234,20 @@ def test_on_local_workers_a_failure_and_a_lost_task_name_their_items():
     assert by_item[4].lost and by_item[5].lost and by_item[4].error.startswith("task lost: ")
 
 
+def test_local_workers_run_without_dask_s_malloc_trim_and_with_one_blas_thread(monkeypatch):
+    # docs/studies.md: Dask's MALLOC_TRIM_THRESHOLD_ makes every solve about 10 % slower; one BLAS thread stays
+    from strokeopt.studies.runner import WORKER_ENVIRON_UNSET, connected
+
+    monkeypatch.delenv("MALLOC_TRIM_THRESHOLD_", raising=False)
+    with connected(StudyRunner(2)) as client:
+        client.wait_for_workers(2)
+        environs = client.run(lambda: {k: os.environ.get(k) for k in ("MALLOC_TRIM_THRESHOLD_", "OMP_NUM_THREADS",
+                                                                        "OPENBLAS_NUM_THREADS")})
+    assert WORKER_ENVIRON_UNSET == ("MALLOC_TRIM_THRESHOLD_",) and len(environs) == 2
+    for env in environs.values():
+        assert env == {"MALLOC_TRIM_THRESHOLD_": None, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
+
+
 # --- a cluster started with the Dask command line -----------------------------------------------------------------
 
 def _dask_command() -> list[str]:

@@ -303,7 +303,7 @@ def connected(runner: StudyRunner, tasks: int | None = None):
         with _quiet_dask():
             cluster = None
             try:
-                with _ctrl_c_held():
+                with _ctrl_c_held(), _worker_environ():
                     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
                                            silence_logs=logging.ERROR, preload=[_WORKER_IGNORES_CTRL_C])
                 with Client(cluster) as client:
@@ -363,6 +363,22 @@ def _reach(runner: StudyRunner):
 #: strokeopt and CasADi are imported while the cluster starts, not by each worker's first task.
 _WORKER_IGNORES_CTRL_C = ("import signal\nsignal.signal(signal.SIGINT, signal.SIG_IGN)\n"
                           "import casadi, strokeopt.studies.sweeps, strokeopt.studies.robust\n")
+
+
+#: Environment variables Dask's nanny sets in each worker process that strokeopt's local workers go without
+#: (``distributed.nanny.pre-spawn-environ``; None unsets): ``MALLOC_TRIM_THRESHOLD_`` (64 KiB: memory handed back to
+#: the system as soon as it is freed) makes every solve's many short-lived allocations system calls, about 10 %
+#: slower solves here. One BLAS thread each stays (Dask's ``OMP_NUM_THREADS=1`` and the like).
+WORKER_ENVIRON_UNSET = ("MALLOC_TRIM_THRESHOLD_",)
+
+
+@contextmanager
+def _worker_environ():
+    """Dask's settings of the local workers' environment, less :data:`WORKER_ENVIRON_UNSET`."""
+    import dask.config
+
+    with dask.config.set({f"distributed.nanny.pre-spawn-environ.{k}": None for k in WORKER_ENVIRON_UNSET}):
+        yield
 
 
 @contextmanager
