@@ -228,10 +228,12 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
     torque command. When the simulation rejects the ``min_time`` design, the rate is searched below it with the
     most accurate stroke at fixed rates, each confirmed the same way (a step down by the simulation's excess; a
     safeguarded secant to the resolution). The tasks do not depend on each other, so an accuracy's answer does not
-    depend on which others are asked. Then, loosest first, a looser accuracy's confirmed design answers every
-    tighter one it meets, and an accuracy whose ``min_time`` found no design is solved again here from the
-    looser accuracy's design; last, a tighter accuracy's rate is given to every looser one below it (its design
-    meets them): a tighter accuracy never gets a higher rate than a looser one. The motor and pulley are the
+    depend on which others are asked. Where an accuracy's own starts confirm no rate, the next looser rung of a
+    fixed ladder (:data:`DEFAULT_ACCURACIES_MM`, whether asked or not: solved the same way, here, where not asked)
+    answers it with its confirmed design where that meets it, or, where ``min_time`` found no design, gives the
+    start of one more solve here: the answer is the same whichever accuracies are asked (0.03 mm alone is solved
+    from the 0.05 mm rung's design, as in the default list). Last, a tighter accuracy's rate is given to every
+    looser one below it (its design meets them): a tighter accuracy never gets a higher rate than a looser one. The motor and pulley are the
     problem's (``drive.motor``, ``pulley_teeth``), as for the classic law, so the two curves compare strokes on
     one drive. ``progress(step, text)`` is called once per step (a line per solve or simulation; on workers
     the lines are printed on the workers' standard error).
@@ -254,22 +256,41 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
                          chained=False) if tasks else []
     own.update({o.item: o.row if o.ok else (TradeoffPoint(o.item, "optimal", None, "solver", None, o.error), None,
                                              False) for o in outcomes})
-    points, confirmed, prev = {}, None, None
-    for acc in loosest_first:
-        point, trial, no_design = own[acc]
-        if confirmed is not None and within_limit(confirmed.result.handover_error, acc):
-            # the looser accuracy's design meets this one too, and its rate bounds this one's
-            looser = points[prev]
-            point, trial = replace(looser, accuracy=acc, detail=looser.detail + f" (the design of {prev * 1e3:g} mm)"), \
-                confirmed
-            if progress is not None:
-                progress(_tag(acc), f"{confirmed.spm:.1f} spm: the design of {prev * 1e3:g} mm meets it "
-                                    f"({confirmed.result.handover_error * 1e3:.4f} mm)")
-        elif no_design and confirmed is not None:  # from the looser design only (the first starts found none)
-            point, trial, _ = _one_accuracy(problem, acc, resolution, lowest, spm0, progress or _quiet, confirmed)
-        points[acc] = point
-        if trial is not None:
-            confirmed, prev = trial, acc
+    rungs = sorted(a * 1e-3 for a in DEFAULT_ACCURACIES_MM)
+    answers: dict = {}
+
+    def answer(acc):
+        """``(point, confirmed trial or None)`` of one accuracy: its own starts; where they confirm no rate, the
+        design of the next looser rung of the fixed ladder :data:`DEFAULT_ACCURACIES_MM` (asked or not, solved the
+        same way) where it meets this accuracy, else a solve from that design where min_time found none."""
+        if acc in answers:
+            return answers[acc]
+        if acc in own:
+            point, trial, no_design = own[acc]
+        elif top is not None and within_limit(top.result.handover_error, acc):
+            point, trial, no_design = replace(top_point, accuracy=acc), top, False
+        else:  # a rung not asked: its own starts, here
+            point, trial, no_design = _one_accuracy(problem, acc, resolution, lowest, spm0, progress or _quiet)
+        rung = next((r for r in rungs if r > acc * (1 + 1e-9)), None)
+        if trial is None and rung is not None:
+            looser, near = answer(rung)[1], answers[rung][0]
+            if looser is not None and within_limit(looser.result.handover_error, acc):
+                point, trial = replace(near, accuracy=acc, detail=near.detail + f" (the design of {rung * 1e3:g} mm)"), \
+                    looser
+                if progress is not None:
+                    progress(_tag(acc), f"{looser.spm:.1f} spm: the design of {rung * 1e3:g} mm meets it "
+                                        f"({looser.result.handover_error * 1e3:.4f} mm)")
+            elif no_design and looser is not None:  # from the looser rung's design (its own starts found none)
+                if progress is not None:
+                    progress(_tag(acc), f"its own starts found no design; again from the design of {rung * 1e3:g} mm "
+                                        f"({looser.spm:.1f} spm)")
+                point, trial, _ = _one_accuracy(problem, acc, resolution, lowest, spm0, progress or _quiet, looser)
+                point = replace(point, detail=point.detail + f" (from the design of {rung * 1e3:g} mm: its own starts "
+                                                             "found no design)")
+        answers[acc] = (point, trial)
+        return answers[acc]
+
+    points = {acc: answer(acc)[0] for acc in loosest_first}
     best = None  # tightest first: a tighter accuracy's design meets every looser one
     for acc in accuracies:
         if best is not None and (points[acc].max_spm is None or points[acc].max_spm < best.max_spm):
