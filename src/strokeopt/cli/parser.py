@@ -27,16 +27,18 @@ def _verbose_option(p: argparse.ArgumentParser, what: str) -> None:
     p.add_argument("--verbose", action="store_true", help=f"print {what}")
 
 
-def _drive_options(p: argparse.ArgumentParser, design: str, repeatable: bool = False) -> None:
-    """--motor, --pulley-teeth and --design: the same meaning on every command (cli/common.apply_drive_options)."""
+def _drive_options(p: argparse.ArgumentParser, design: str, repeatable: bool = False, rate: bool = True) -> None:
+    """--motor, --pulley-teeth and --design: the same meaning on every command (cli/common.apply_drive_options);
+    ``rate``: the command has --spm (the design's rate is used)."""
     more = " (repeatable: only these)" if repeatable else ""
     p.add_argument("--motor", action="append" if repeatable else "store", metavar="NAME",
                    help=f"catalogue motor of the drive{more}; the same as --set drive.motor=NAME")
     p.add_argument("--pulley-teeth", type=int, action="append" if repeatable else "store", metavar="Z",
                    help=f"pulley tooth count{more}; the same as --set transmission.pulley_teeth=Z")
     p.add_argument("--design", metavar="DESIGN_JSON",
-                   help=f"a design.json of 'strokeopt solve --out': its stitch rate, motor and pulley; {design}. "
-                        "A --spm, --motor, --pulley-teeth or --set asking for other values is an error")
+                   help=f"a design.json of 'strokeopt solve --out': its {'stitch rate, ' if rate else ''}motor and "
+                        f"pulley; {design}. A {'--spm, ' if rate else ''}--motor, --pulley-teeth or --set asking for "
+                        "other values is an error")
     p.set_defaults(drive_lists=repeatable)
 
 
@@ -307,7 +309,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--strokes", choices=("both", "classic", "optimal"), default="both",
                    help="which strokes to compare (default both)")
     p.add_argument("--resolution", type=float, default=10.0, help="stitch-rate resolution of the search [spm] (default 10)")
-    _drive_options(p, "(its motor and pulley only: the stroke is solved again at every rate)")
+    _drive_options(p, "the stroke is solved again at every rate", rate=False)
     _study_runner_options(p, "the optimal stroke's accuracies",
                           "each taking the next accuracy as it frees up; every accuracy starts from the problem's "
                           "own rate and stroke, so the table is the same on any number of workers")
