@@ -12,7 +12,8 @@ from strokeopt.drive.checks import within_limit
 from strokeopt.drive.sizing import bisect_highest
 from strokeopt.errors import SolverError
 from strokeopt.servo.accuracy import handover_accuracy
-from strokeopt.studies.tradeoff import DEFAULT_ACCURACIES_MM, TradeoffPoint, _binding_of
+from strokeopt.studies.confirm import binding_of as _binding_of
+from strokeopt.studies.tradeoff import DEFAULT_ACCURACIES_MM, TradeoffPoint
 
 
 def tradeoff_optimal_bisection(problem, accuracies=None, *, resolution: float = 10.0, lowest: float = 100.0,

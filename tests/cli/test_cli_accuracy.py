@@ -127,6 +127,9 @@ def test_tradeoff_classic_json_and_plot(capsys, reference_path, tmp_path):
     (["--accuracies", "0.1,abc"], "--accuracies"),
     (["--accuracies", "0.1,-0.2"], "every accuracy must lie in [0.0001, 100] mm"),
     (["--resolution", "0"], "--resolution"),
+    (["--starts", "0"], "--starts: expected a whole number of starts per accuracy in 1..12, got '0'"),
+    (["--starts", "13"], "--starts: expected a whole number of starts per accuracy in 1..12"),
+    (["--starts", "two"], "--starts: expected a whole number"),
 ])
 def test_tradeoff_bad_options_exit_2(capsys, reference_path, args, words):
     assert main(["tradeoff", str(reference_path), "--strokes", "classic", "--plot", "none", *args]) == 2

@@ -177,7 +177,7 @@ def cmd_tradeoff(args) -> int:
     from ..report.servo import plot_tradeoff, tradeoff_text
     from ..design.transcription.settings import ACCURACY_RANGE_MM
     from ..studies.runner import check_reachable, study_runner
-    from ..studies.tradeoff import DEFAULT_ACCURACIES_MM, RESOLUTION_RANGE_SPM, print_step, tradeoff
+    from ..studies.tradeoff import DEFAULT_ACCURACIES_MM, RESOLUTION_RANGE_SPM, STARTS_MAX, print_step, tradeoff
 
     problem = _load(args)
     require_belt_drive(problem, "tradeoff")
@@ -195,13 +195,20 @@ def cmd_tradeoff(args) -> int:
     if not lo <= args.resolution <= hi:
         raise ProblemError("--resolution", "", f"must lie in [{lo:g}, {hi:g}] spm (finer than the rate settles to, "
                                                f"or coarser than the search's span), got {args.resolution!r}")
-    runner = study_runner(args.workers, args.scheduler, tasks=len(accuracies or DEFAULT_ACCURACIES_MM))
+    try:
+        starts = int(str(args.starts).strip())
+    except ValueError:
+        starts = None
+    if starts is None or not 1 <= starts <= STARTS_MAX:
+        raise ProblemError("--starts", "", f"expected a whole number of starts per accuracy in 1..{STARTS_MAX}, got "
+                                           f"{args.starts!r}")
+    runner = study_runner(args.workers, args.scheduler, tasks=len(accuracies or DEFAULT_ACCURACIES_MM) * starts)
     if args.strokes == "classic":
         runner = None  # the classic law alone starts no worker (the options were still checked)
     else:
         check_reachable(runner)  # an unreachable scheduler: before the classic law's simulations
     report = tradeoff(problem, accuracies, strokes=args.strokes, resolution=args.resolution,
-                      progress=None if args.json else print_step, runner=runner)
+                      progress=None if args.json else print_step, runner=runner, starts=starts)
     if runner is not None:
         report["runner"] = runner.describe()
     report = {"status": "ok", **report, "drive": drive_used(args, problem)}

@@ -309,6 +309,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--strokes", choices=("both", "classic", "optimal"), default="both",
                    help="which strokes to compare (default both)")
     p.add_argument("--resolution", type=float, default=10.0, help="stitch-rate resolution of the search [spm] (default 10)")
+    p.add_argument("--starts", default="1", metavar="K",
+                   help="starts per accuracy of the optimal stroke, 1 to 12 (default 1: the problem's own rate): K "
+                        "start rates spread over one period of the belt mode's phase in the handover window, each a "
+                        "task of the runner; the highest confirmed rate is kept and the table says how many starts "
+                        "reached it (K times the solves)")
     _drive_options(p, "the stroke is solved again at every rate", rate=False)
     _study_runner_options(p, "the optimal stroke's accuracies",
                           "each taking the next accuracy as it frees up; every accuracy starts from the problem's "

@@ -129,10 +129,20 @@ def tradeoff_text(report: dict) -> str:
             "was simulated; '-': no higher rate was tried, the binding limit is the design's own)\n"
             "binding limit: torque_limit = the servo's torque command, peak_torque / rms_torque = the design's "
             "rigid-load checks, handover_accuracy = the simulated error")
-    return head + "\n\n" + format_table(report["points"], [
-        ("accuracy_mm", "accuracy mm"), ("stroke", "stroke"), ("max_spm", "max spm"), ("binding", "binding limit"),
-        ("confirmed_spm", "confirmed at spm"), ("handover_error_mm", "error there mm"),
-        ("failed_spm", "rejected at spm"), ("failed_error_mm", "error at rejected mm")])
+    columns = [("accuracy_mm", "accuracy mm"), ("stroke", "stroke"), ("max_spm", "max spm"), ("binding", "binding limit"),
+               ("confirmed_spm", "confirmed at spm"), ("handover_error_mm", "error there mm"),
+               ("failed_spm", "rejected at spm"), ("failed_error_mm", "error at rejected mm")]
+    points = report["points"]
+    starts = report.get("starts", 1)
+    if starts > 1:  # the optimal stroke from several start rates: how many reached the answer, what each found
+        head += (f"\nstarts: each accuracy of the optimal stroke solved from {starts} start rates over one period of "
+                 "the belt mode's phase; 'starts at best': how many confirmed the answer's rate, 'start rates': the "
+                 "rate each confirmed ('-': none; 0 at best: the answer came from the next looser accuracy's design)")
+        points = [{**p, "starts at best": "" if "starts" not in p else f"{p['starts_at_best']} of {p['starts']}",
+                   "start rates": " ".join("-" if r is None else f"{r:g}" for r in p.get("start_max_spm", []))}
+                  for p in points]
+        columns += [("starts at best", "starts at best"), ("start rates", "start rates")]
+    return head + "\n\n" + format_table(points, columns)
 
 
 def _words(name: str) -> str:
@@ -173,7 +183,8 @@ def plot_tradeoff(report: dict, path: str | Path | None = None):
             said = (p["max_spm"], p["binding"])
             last = p["accuracy_mm"] == right  # the rightmost label goes to the left of its point, inside the axes
             error = "" if p.get("handover_error_mm") is None else f" ({p['handover_error_mm']:.3g} mm)"
-            ax.annotate(_words(p["binding"]) + error, (p["accuracy_mm"], p["max_spm"]),
+            reached = "" if "starts" not in p else f", {p['starts_at_best']} of {p['starts']} starts"
+            ax.annotate(_words(p["binding"]) + error + reached, (p["accuracy_mm"], p["max_spm"]),
                         xytext=(-4 if last else 4, 5 if above else -10),
                         textcoords="offset points", fontsize=7, color=line.get_color(), ha="right" if last else "left")
     missing: dict = {}  # accuracies without a rate (per stroke): one line in the upper left corner

@@ -20,6 +20,8 @@ from ..servo.accuracy import TORQUE_BASIS, handover_accuracy
 from ..servo.loop import tuned_gains
 from ..servo.plant import axis_from_problem
 from ..servo.settings import settings_of, shortest_move
+from .confirm import (RATE_BRACKET, RESERVE_STEPS, Trial, binding_of, confirm, failed_fields, more_reserve,
+                      search_below)
 
 
 # --------------------------------------------------------------------------- what accuracy costs in time
@@ -48,10 +50,23 @@ class TradeoffPoint:
     failed_spm: float | None = None
     failed_error: float | None = None
     failed_reason: str = ""
+    #: the highest rate each start of :func:`tradeoff_optimal` confirmed, on the grid (None: none), the starts in
+    #: order (empty: a single start from the problem's own rate)
+    start_spm: tuple = ()
+
+    @property
+    def starts_at_best(self) -> int | None:
+        """How many starts confirmed the answer's grid rate (None: a single start)."""
+        if len(self.start_spm) < 2 or self.max_spm is None:
+            return None
+        return sum(1 for r in self.start_spm if r == self.max_spm)
 
     def as_dict(self) -> dict:
         confirmed = self.max_spm if self.confirmed_spm is None else self.confirmed_spm
-        return {"accuracy_mm": round(self.accuracy * 1e3, 9), "stroke": self.stroke, "max_spm": self.max_spm,
+        starts = {} if len(self.start_spm) < 2 else {
+            "starts": len(self.start_spm), "starts_at_best": self.starts_at_best,
+            "start_max_spm": list(self.start_spm)}
+        return {**starts, "accuracy_mm": round(self.accuracy * 1e3, 9), "stroke": self.stroke, "max_spm": self.max_spm,
                 "binding": self.binding, "confirmed_spm": None if confirmed is None else round(confirmed, 1),
                 "handover_error_mm": None if self.handover_error is None else self.handover_error * 1e3,
                 "failed_spm": None if self.failed_spm is None else round(self.failed_spm, 1),
@@ -146,76 +161,8 @@ def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step
     return points
 
 
-def _binding_of(reason: str) -> str:
-    """The limit a failed design names first (its first line names the worst violated limit)."""
-    text = (reason.splitlines() or [""])[0].lower().replace("_", " ")
-    for key, name in (("handover accuracy", "handover_accuracy"), ("torque limit", "torque_limit"),
-                      ("rms", "rms_torque"), ("peak torque", "peak_torque"),
-                      ("speed", "peak_speed"), ("belt", "belt_tension"), ("jerk", "jerk"), ("inertia", "inertia_ratio")):
-        if key in text:
-            return name
-    return "solver"
-
-
-#: The smallest relative step down of the confirming search of :func:`tradeoff_optimal`.
-CONFIRM_TOLERANCE = 2e-3
-#: Trial rates of the confirming search at most, per accuracy.
-CONFIRM_TRIALS = 6
-#: Re-solves of ``min_time`` with a torque reserve at most, per accuracy: where the servo's torque command
-#: passes the torque limit that the rigid load of the design meets, the design keeps the excess unused
-#: (``[design] torque_reserve_pct``) and is solved again; the margin added to each step.
-RESERVE_STEPS = 2
-RESERVE_MARGIN = 2e-3
-#: The bracket of rates at which ``min_time`` stops halving (``DesignSettings.rate_bracket``): about the
-#: resolution of the answer (10 spm at 600-900 spm); the confirming search tries the grid rates below it.
-RATE_BRACKET = 1e-2
-#: The step down after a trial rate without a design (its most accurate stroke misses the accuracy there).
-NO_DESIGN_STEP = 0.95
-#: The objective of the confirming search's designs: at each trial rate the most accurate stroke (its term
-#: minimised), so the search asks whether *a* stroke meets the accuracy there; one solve, no pinned torques.
-SEARCH_OBJECTIVE = "min_handover_error"
-#: Consecutive hopeless trial rates (no design: the most accurate stroke's term misses the accuracy there; or
-#: a simulated error no smaller than at the rate above) after which the confirming search gives up: lower
-#: rates do not help once the error is set by the table, the encoder and the belt's vibration rather than by
-#: the speed.
-NO_DESIGN_TRIALS = 2
-
-
-@dataclass
-class _Trial:
-    """A design at one rate and its full simulation: ``excess`` > 0 fails (max of error/accuracy and
-    torque command/limit, minus 1; inf when the design has no solution)."""
-
-    spm: float
-    excess: float
-    reason: str = ""
-    design: object = None
-    result: object = None
-
-    @property
-    def ok(self) -> bool:
-        return self.excess <= 0.0
-
-
-def _confirm(problem, design, spm: float, acc: float) -> _Trial:
-    """The full servo simulation of ``design``'s stroke at its rate: does it meet ``acc`` within the torque
-    limit? The accuracy within the design's ``check_tolerance``: the design holds its error term at
-    instants of the handover window, and between two of them the error may peak that much higher."""
-    res = handover_accuracy(problem, design.stroke, spm)
-    tol = design.settings.check_tolerance if design.settings is not None else 0.0
-    excess = max(res.handover_error / (acc * (1 + tol)), res.peak_torque_command / res.torque_limit) - 1.0  # <= 0:
-    # within_limit(error, acc, tol) and the torque command within its limit
-    reason = ""
-    if res.torque_limited:
-        reason = (f"torque limit: the servo's torque command reaches {res.peak_torque_command:.2f} N m, "
-                  f"limit {res.torque_limit:.2f} N m")
-    elif not within_limit(res.handover_error, acc, tol):
-        reason = f"handover accuracy: the full simulation of the design gives {res.handover_error * 1e3:.4f} mm"
-    return _Trial(spm, excess, reason, design, res)
-
-
 def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowest: float = 100.0,
-                     start: float | None = None, progress=None, runner=None) -> list[TradeoffPoint]:
+                     start: float | None = None, progress=None, runner=None, starts: int = 1) -> list[TradeoffPoint]:
     """Highest stitch rate with the optimal stroke for each accuracy [m], by ``min_time``.
 
     First, in this process, the drive's own highest rate (``min_time`` with no accuracy held, confirmed as below):
@@ -251,11 +198,20 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
     for acc in loosest_first:
         if top is not None and within_limit(top.result.handover_error, acc):
             own[acc] = (replace(top_point, accuracy=acc), top, False)
-    tasks = [acc for acc in loosest_first if acc not in own]
-    outcomes = run_study(_accuracy_step, tasks, (problem, resolution, lowest, spm0, say), runner=runner,
-                         chained=False) if tasks else []
-    own.update({o.item: o.row if o.ok else (TradeoffPoint(o.item, "optimal", None, "solver", None, o.error), None,
-                                             False) for o in outcomes})
+    rates = start_rates(problem, spm0, starts)
+
+    def own_starts(accs) -> dict:  # each accuracy from each start rate, every pair a task of the runner
+        items = [(acc, rate) for acc in accs for rate in rates]
+        outcomes = run_study(_accuracy_step, items, (problem, resolution, lowest, say, len(rates) > 1),
+                             runner=runner, chained=False) if items else []
+        rows = {}
+        for o in outcomes:
+            acc = o.item[0]
+            rows.setdefault(acc, []).append(o.row if o.ok else (
+                TradeoffPoint(acc, "optimal", None, "solver", None, o.error), None, False))
+        return {acc: _best_start(found) for acc, found in rows.items()}
+
+    own.update(own_starts([acc for acc in loosest_first if acc not in own]))
     rungs = sorted(a * 1e-3 for a in DEFAULT_ACCURACIES_MM)
     answers: dict = {}
 
@@ -269,8 +225,9 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
             point, trial, no_design = own[acc]
         elif top is not None and within_limit(top.result.handover_error, acc):
             point, trial, no_design = replace(top_point, accuracy=acc), top, False
-        else:  # a rung not asked: its own starts, here
-            point, trial, no_design = _one_accuracy(problem, acc, resolution, lowest, spm0, progress or _quiet)
+        else:  # a rung not asked: its own starts, as an asked accuracy's
+            point, trial, no_design = own_starts([acc])[acc]
+        own_point = point
         rung = next((r for r in rungs if r > acc * (1 + 1e-9)), None)
         if trial is None and rung is not None:
             looser, near = answer(rung)[1], answers[rung][0]
@@ -287,6 +244,8 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
                 point, trial, _ = _one_accuracy(problem, acc, resolution, lowest, spm0, progress or _quiet, looser)
                 point = replace(point, detail=point.detail + f" (from the design of {rung * 1e3:g} mm: its own starts "
                                                              "found no design)")
+        if point.start_spm != own_point.start_spm:  # answered from the rung: what the own starts found stays
+            point = replace(point, start_spm=own_point.start_spm)
         answers[acc] = (point, trial)
         return answers[acc]
 
@@ -315,16 +274,51 @@ def _tag(acc: float) -> str:
     return f"optimal {acc * 1e3:g} mm" if math.isfinite(acc) else "optimal, no accuracy held"
 
 
-def _accuracy_step(shared, acc: float, warm):
-    """One accuracy of :func:`tradeoff_optimal` (a task): its point, its confirmed trial, whether min_time found
-    no design."""
-    problem, resolution, lowest, spm0, say = shared
-    return _one_accuracy(problem, acc, resolution, lowest, spm0, say), None
+def _accuracy_step(shared, item, warm):
+    """One accuracy of :func:`tradeoff_optimal` from one start rate (a task; ``item`` = (accuracy, rate)): its
+    point, its confirmed trial, whether min_time found no design."""
+    problem, resolution, lowest, say, several = shared
+    acc, spm0 = item
+    tag = _tag(acc) + (f", start {spm0:.1f} spm" if several else "")
+    return _one_accuracy(problem, acc, resolution, lowest, spm0, say, tag=tag), None
 
 
-def _one_accuracy(problem, acc: float, resolution: float, lowest: float, spm0: float, say, looser=None):
+#: The most starts per accuracy (``strokeopt tradeoff --starts``).
+STARTS_MAX = 12
+
+
+def start_rates(problem, spm0: float, count: int) -> list[float]:
+    """The start rates of :func:`tradeoff_optimal`: ``spm0`` and ``count - 1`` more spread over one period of the
+    belt mode's phase in the handover window. The handover move lasts ``T`` at ``spm0`` (a move's time goes with
+    one over the rate) and the belt mode rings at ``f`` (the servo's plant,
+    :attr:`~strokeopt.servo.plant.DriveAxis.resonance_hz`): at ``spm0 / (1 - k / (count f T))`` the move is ``k /
+    count`` of the mode's period shorter (of half the move where the period is longer). Deterministic: the same
+    starts on every run."""
+    if count <= 1:
+        return [spm0]
+    timing = problem.timing
+    move = timing.handover_move or timing.moves[0]
+    duration = float(timing.schedule(spm0).duration[move.index - 1])
+    settings = settings_of(problem)
+    f = axis_from_problem(problem, settings).resonance_hz
+    period = min(1.0 / f, 0.5 * duration)  # a mode slower than the move: starts over half the move's time
+    return [spm0 / (1.0 - k / count * period / duration) for k in range(count)]
+
+
+def _best_start(rows: list) -> tuple:
+    """One accuracy's answer from its starts' ``(point, trial, no_design)``: the highest confirmed rate (the first
+    start of equals), the rate each start confirmed on the point (:attr:`TradeoffPoint.start_spm`); no design only
+    where no start found one."""
+    confirmed = [r for r in rows if r[1] is not None]
+    point, trial, _ = max(confirmed, key=lambda r: r[1].spm) if confirmed else rows[0]
+    if len(rows) > 1:
+        point = replace(point, start_spm=tuple(r[0].max_spm for r in rows))
+    return point, trial, all(r[2] for r in rows)
+
+
+def _one_accuracy(problem, acc: float, resolution: float, lowest: float, spm0: float, say, looser=None, tag=None):
     """The highest confirmed rate at one accuracy: ``(point, confirmed trial or None, min_time found no design)``;
-    ``looser``: a looser accuracy's confirmed trial, the last start of :func:`_min_time`."""
+    ``looser``: a looser accuracy's confirmed trial, the last start of :func:`_min_time`; ``tag``: of the lines."""
     from ..design.transcription.settings import DesignSettings
     from ..design.solve import solve_design
 
@@ -333,16 +327,16 @@ def _one_accuracy(problem, acc: float, resolution: float, lowest: float, spm0: f
     # the same drive as the classic law: the problem's motor and pulley
     settings = replace(base, accuracy=acc, motor_choice="fixed", pulley="fixed", torque_reserve=reserve,
                        rate_bracket=RATE_BRACKET)
-    tag = _tag(acc)
+    tag = tag or _tag(acc)
     try:
         d = _min_time(problem, spm0, settings, looser, lambda text: say(tag, text))
     except SolverError as exc:
         say(tag, f"min_time: no design ({exc.reason.splitlines()[0]})")
-        return TradeoffPoint(acc, "optimal", None, _binding_of(exc.reason), None, exc.reason), None, True
+        return TradeoffPoint(acc, "optimal", None, binding_of(exc.reason), None, exc.reason), None, True
     warm = d
-    binding = _binding_of(d.notes[0].split("bound by:", 1)[-1])
+    binding = binding_of(d.notes[0].split("bound by:", 1)[-1])
     say(tag, f"min_time {d.spm:.1f} spm ({binding}); full simulation")
-    top, hi = d.spm, _confirm(problem, d, d.spm, acc)
+    top, hi = d.spm, confirm(problem, d, d.spm, acc)
     if not hi.ok:
         say(tag, f"{top:.1f} spm: {hi.reason}")
     for _ in range(RESERVE_STEPS):
@@ -350,7 +344,7 @@ def _one_accuracy(problem, acc: float, resolution: float, lowest: float, spm0: f
         if hi.ok or not res.torque_limited or res.handover_error > acc:
             break
         # the loop's torque command passes the limit the rigid load meets: keep the excess in reserve
-        reserve = _more_reserve(reserve, res)
+        reserve = more_reserve(reserve, res)
         settings = replace(settings, torque_reserve=reserve)
         try:
             d = solve_design(problem, objective="min_time", spm=d.spm, settings=settings, warm_start=d)
@@ -360,17 +354,17 @@ def _one_accuracy(problem, acc: float, resolution: float, lowest: float, spm0: f
         warm, binding = d, "torque_limit"
         say(tag, f"min_time {d.spm:.1f} spm with {100 * reserve:.1f} % of the torque limit in reserve for the "
                  "loop; full simulation")
-        top, hi = d.spm, _confirm(problem, d, d.spm, acc)
+        top, hi = d.spm, confirm(problem, d, d.spm, acc)
         if not hi.ok:
             say(tag, f"{top:.1f} spm: {hi.reason}")
     if hi.ok:
         found, lo = top, hi
     else:
-        lo, hi = _search_below(problem, hi, settings, acc, resolution, lowest, warm, lambda text: say(tag, text))
+        lo, hi = search_below(problem, hi, settings, acc, resolution, lowest, warm, lambda text: say(tag, text))
         found = None if lo is None else lo.spm
-        binding = _binding_of(hi.reason)  # what fails just above the highest confirmed rate
+        binding = binding_of(hi.reason)  # what fails just above the highest confirmed rate
     if found is None:
-        return (TradeoffPoint(acc, "optimal", None, binding, None, f"at {hi.spm:.1f} spm: {hi.reason}", **_failed(hi)),
+        return (TradeoffPoint(acc, "optimal", None, binding, None, f"at {hi.spm:.1f} spm: {hi.reason}", **failed_fields(hi)),
                 None, False)
     max_spm = math.floor(found / resolution + 1e-9) * resolution
     error = lo.result.handover_error
@@ -378,10 +372,10 @@ def _one_accuracy(problem, acc: float, resolution: float, lowest: float, spm0: f
               + ("" if hi.ok else f"; above, at {hi.spm:.1f} spm: {hi.reason}"))
     say(tag, f"the highest confirmed rate: {found:.1f} spm ({error * 1e3:.4f} mm)")
     return (TradeoffPoint(acc, "optimal", max_spm, binding, error, detail, confirmed_spm=found,
-                          **({} if hi.ok else _failed(hi))), lo, False)
+                          **({} if hi.ok else failed_fields(hi))), lo, False)
 
 
-def _min_time(problem, spm0: float, settings, looser: _Trial | None, say):
+def _min_time(problem, spm0: float, settings, looser: Trial | None, say):
     """The ``min_time`` design of one accuracy, from the first of two starts that gives one: the problem's own
     rate and stroke (the accuracy held once a solution breaks it), then the same with the accuracy held from the
     first solve (where the rate a first solve without it finds is one where no stroke meets it); neither depends on
@@ -404,95 +398,8 @@ def _min_time(problem, spm0: float, settings, looser: _Trial | None, say):
             say(f"min_time {where}: no design ({exc.reason.splitlines()[0]}); again {starts[k + 1][0]}")
 
 
-def _failed(trial: _Trial) -> dict:
-    """The failed-rate fields of a :class:`TradeoffPoint` from a rejected trial."""
-    error = None if trial.result is None else trial.result.handover_error
-    return {"failed_spm": trial.spm, "failed_error": error, "failed_reason": trial.reason.splitlines()[0]}
-
-
-def _more_reserve(reserve: float, res) -> float:
-    """The torque reserve that leaves the servo's torque command of ``res`` (an accuracy result) within its limit."""
-    return 1.0 - (1.0 - reserve) * res.torque_limit / res.peak_torque_command * (1.0 - RESERVE_MARGIN)
-
-
-def _search_below(problem, hi: _Trial, settings, acc: float, resolution: float, lowest: float, warm, say):
-    """The highest rate below the rejected ``hi`` whose design (:data:`SEARCH_OBJECTIVE` at that rate) the full
-    simulation confirms, on the grid of the resolution (the answer is reported on it): first the grid rate just
-    below ``hi``, then steps down by the simulation's excess (torque and error grow about with the square of
-    the rate), then a secant through the
-    latest two trials, kept inside the bracket of the confirmed and the rejected rate (else its middle), each
-    trial rounded to a grid rate inside the bracket, until no grid rate is left between them. Returns the
-    confirmed trial (None: none) and the lowest rejected one above it."""
-    from ..design.solve import solve_design
-
-    def trial(spm: float) -> _Trial:
-        nonlocal warm, settings
-        for _ in range(1 + RESERVE_STEPS):
-            try:
-                d = solve_design(problem, objective=SEARCH_OBJECTIVE, spm=spm, settings=settings, warm_start=warm)
-            except SolverError as exc:
-                say(f"{spm:.1f} spm: no design ({exc.reason.splitlines()[0]})")
-                return _Trial(spm, math.inf, exc.reason)
-            warm = d
-            t = _confirm(problem, d, spm, acc)
-            res = t.result
-            if t.ok or not res.torque_limited or res.handover_error > acc:
-                break
-            # the loop's torque command passes the limit the rigid load meets: more in reserve, here and above
-            settings = replace(settings, torque_reserve=_more_reserve(settings.torque_reserve, res))
-            say(f"{spm:.1f} spm: {t.reason}; again with {100 * settings.torque_reserve:.1f} % of the torque limit "
-                "in reserve")
-        say(f"{spm:.1f} spm: " + ("confirmed" if t.ok else t.reason))
-        return t
-
-    def step_down(t: _Trial) -> float:
-        factor = 1.0 / math.sqrt(1.0 + t.excess) if math.isfinite(t.excess) else NO_DESIGN_STEP
-        return t.spm * min(factor, 1.0 - CONFIRM_TOLERANCE)
-
-    def on_grid(x: float, floor: float) -> float | None:
-        """The grid rate nearest ``x`` strictly between ``floor`` and the rejected rate (None: none is left)."""
-        first = math.floor(floor / resolution + 1e-9) + 1
-        last = math.ceil(hi.spm / resolution - 1e-9) - 1
-        if last < first:
-            return None
-        return resolution * min(max(round(x / resolution), first), last)
-
-    lo, trials, no_design = None, 0, 0
-    x = on_grid(hi.spm, lowest - resolution)  # the most accurate stroke may meet it just below the rejected one
-    while lo is None:
-        if x is None or x < lowest or trials >= CONFIRM_TRIALS or no_design >= NO_DESIGN_TRIALS:
-            return None, hi
-        t, trials = trial(x), trials + 1
-        hopeless = t.design is None or (not t.ok and math.isfinite(hi.excess) and t.excess >= hi.excess)
-        no_design = no_design + 1 if hopeless else 0
-        if t.ok:
-            lo = t
-        else:
-            hi = t
-            x = on_grid(min(step_down(t), t.spm - resolution), lowest - resolution)
-    last = [hi, lo]  # the two latest finite trials: a secant through them, kept inside the bracket
-    while trials < CONFIRM_TRIALS:
-        a, b = last[-2], last[-1]
-        mid = 0.5 * (lo.spm + hi.spm)
-        x = (b.spm - b.excess * (b.spm - a.spm) / (b.excess - a.excess)
-             if math.isfinite(a.excess) and b.excess != a.excess else mid)
-        if not lo.spm < x < hi.spm:
-            x = mid
-        x = on_grid(x, lo.spm)
-        if x is None:
-            break
-        t, trials = trial(x), trials + 1
-        if t.ok:
-            lo = t
-        else:
-            hi = t
-        if math.isfinite(t.excess):
-            last.append(t)
-    return lo, hi
-
-
 def tradeoff(problem, accuracies=None, *, strokes: str = "both", resolution: float = 10.0, step: float = 50.0,
-             progress=None, runner=None) -> dict:
+             progress=None, runner=None, starts: int = 1) -> dict:
     """The report of ``strokeopt tradeoff``: for each required handover accuracy the highest
     stitch rate with the problem's classic law and with the optimal stroke, and the binding limit.
     ``progress(step, text)``: called with a line at every step (a simulated rate, a design solve).
@@ -504,7 +411,9 @@ def tradeoff(problem, accuracies=None, *, strokes: str = "both", resolution: flo
         points += tradeoff_classic(problem, accuracies, resolution=resolution, step=max(step, resolution),
                                    progress=progress)
     if strokes in ("both", "optimal"):
-        points += tradeoff_optimal(problem, accuracies, resolution=resolution, progress=progress, runner=runner)
+        points += tradeoff_optimal(problem, accuracies, resolution=resolution, progress=progress, runner=runner,
+                                   starts=starts)
     return {"problem": problem.name, "motor": problem.drive.motor, "pulley_teeth": problem.pulley_teeth,
             "law": problem.default_law.label, "resolution_spm": resolution, "torque_basis": TORQUE_BASIS,
+            "starts": starts,
             "points": [p.as_dict() for p in points]}
