@@ -32,6 +32,16 @@ def test_bad_tolerances_are_refused(capsys, text, words):
     assert len(err) == 1 and "--tolerance" in err[0] and words in err[0]
 
 
+def test_a_field_given_two_tolerances_is_refused_before_any_work(capsys):
+    assert main(["robust", str(REFERENCE), "--tolerance", f"{K2}=±10%", "--tolerance", f"{K2}=±5%", "--samples", "8",
+                 "--workers", "1", "--plot", "none"]) == 2
+    captured = capsys.readouterr()
+    err = captured.err.strip().splitlines()
+    assert err == [f"strokeopt: error: --tolerance: {K2} is given twice ({K2} = 900 ±10 % (uniform) and {K2} = 900 "
+                   "±5 % (uniform)): give each field one tolerance"]
+    assert "objective" not in captured.out  # refused before the design was solved
+
+
 @pytest.mark.parametrize("option, words", [(["--samples", "3"], "--samples: must lie in [8, 100000]"),
                                            (["--samples", "x"], "--samples: expected a whole number"),
                                            (["--seed", "-1"], "--seed: must lie in")])

@@ -58,13 +58,13 @@ def _study_runner_options(p: argparse.ArgumentParser, study: str,
     """--workers and --scheduler: where a study's tasks run (studies/runner.py); ``spread``: how the tasks share
     the workers."""
     p.add_argument("--workers", metavar="N",
-                   help=f"worker processes for {study}, 1 to 256: 1 solves in this process one after the other (the "
+                   help=f"worker processes for {study}, 1 to 256: 1 runs them in this process one after the other (the "
                         f"reference answer); N > 1 starts a Dask LocalCluster of N processes, {spread} (default: one "
                         "per core, or $STROKEOPT_SCHEDULER when set)")
     p.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                    help=f"run {study} on the workers of this Dask scheduler (each with strokeopt installed, started "
                         "with 'dask worker tcp://HOST:PORT --nthreads 1'); the same as setting STROKEOPT_SCHEDULER. "
-                        "An unreachable scheduler is an error before any solve")
+                        "An unreachable scheduler is an error before any work")
 
 
 def _plot_option(p: argparse.ArgumentParser, name: str) -> None:

@@ -32,7 +32,8 @@ def add_robust_parser(sub, problem_parent, drive_options, runner_options, plot_o
                    help="quasi-random sample: scrambled Sobol (default) or Latin hypercube")
     p.add_argument("--spm", help="stitches per minute of a design solved now (default: machine.spm of the file)")
     drive_options(p, "its stroke is the one judged on every sampled machine")
-    runner_options(p, "the samples")
+    runner_options(p, "the samples", "each simulating the next sample as it frees up (the samples do not depend on "
+                                      "each other: the same numbers on any number of workers)")
     plot_option(p, "robust_<spm>spm")
     p.set_defaults(run=cmd_robust)
 
@@ -51,7 +52,7 @@ def cmd_robust(args) -> int:
     from ..design.result import design_from_data
     from ..io.plain import to_json
     from ..report.robust import plot_robust, robust_text
-    from ..studies.robust import SAMPLES_RANGE, parse_tolerance, robust_study
+    from ..studies.robust import SAMPLES_RANGE, check_distinct, parse_tolerance, robust_study
     from ..studies.runner import study_runner
     from ..studies.verified import solve_verified
 
@@ -62,6 +63,7 @@ def cmd_robust(args) -> int:
                                               "'model.springs.k2.stiffness_N_m=±10%'")
     problem = _load(args, fix_in_design=True)
     tolerances = [parse_tolerance(t, problem) for t in args.tolerance]
+    check_distinct(tolerances)
     runner = study_runner(args.workers, args.scheduler, tasks=samples)  # an unreachable scheduler: before any work
     if args.design_data is not None:
         design = design_from_data(problem, args.design_data, args.design_stroke)

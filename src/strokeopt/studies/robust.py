@@ -130,6 +130,16 @@ def unit_samples(count: int, dims: int, method: str = "sobol", seed: int = 0) ->
     return qmc.LatinHypercube(dims, seed=seed).random(count)
 
 
+def check_distinct(tolerances: list[Tolerance]) -> None:
+    """One scatter per field (a second would overwrite the first in every sample): else ProblemError naming it."""
+    seen: dict = {}
+    for t in tolerances:
+        if t.field in seen:
+            raise ProblemError("--tolerance", "", f"{t.field} is given twice ({seen[t.field].describe()} and "
+                                                  f"{t.describe()}): give each field one tolerance")
+        seen[t.field] = t
+
+
 def robust_study(design, tolerances: list[Tolerance], samples: int = 1000, *, seed: int = 0, method: str = "sobol",
                  runner=None, progress=None) -> dict:
     """The tolerance study of ``design`` (a solved or read-back :class:`~strokeopt.design.result.Design`):
@@ -142,6 +152,7 @@ def robust_study(design, tolerances: list[Tolerance], samples: int = 1000, *, se
         raise ProblemError("--samples", "", f"must lie in [{SAMPLES_RANGE[0]}, {SAMPLES_RANGE[1]}], got {samples}")
     if method not in METHODS:
         raise ProblemError("--method", "", f"{method!r} is not one of {', '.join(METHODS)}")
+    check_distinct(tolerances)
     u = unit_samples(samples, len(tolerances), method, seed)
     items = [(k, tuple(t.value(float(x)) for t, x in zip(tolerances, row))) for k, row in enumerate(u)]
     outcomes = run_study(_sample_step, items, (design, tuple(tolerances)), runner=runner, progress=progress,
