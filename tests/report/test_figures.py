@@ -142,12 +142,19 @@ def test_solve_sweep_table_names_the_solve_time(capsys, reference_path, monkeypa
     import strokeopt.studies.sweeps as studies
 
     rows = [{"spm": spm, "feasible": True, "objective_value": v, "motor": "055U2B30", "pulley_teeth": 24,
-             "peak_torque_N_m": v, "rms_torque_N_m": v / 2, "solve_time_s": 0.5, "reason": None}
+             "peak_torque_N_m": v, "rms_torque_N_m": v / 2, "solve_time_s": 0.5, "reason": None,
+             "objective_unit": "N m", "handover_error_mm": 0.04}
             for spm, v in ((700.0, 1.25), (1000.0, 2.5))]
+    rows[1].update(feasible=False, reason="no motor of the catalogue can drive this design at 1000 spm; a long "
+                                          "sentence that stays in its own column")
     monkeypatch.setattr(studies, "sweep_design", lambda *a, **k: rows)
     assert main(["solve", str(reference_path), "--spm", "700:1000:300", "--plot", "none"]) == 0
     out = capsys.readouterr().out
-    assert "solve time s" in out
+    assert "solve + verify s" in out and "objective N m" in out and "handover mm" in out
+    # the reason, aligned left as the last column: the feasible row's '-' right after its time, no padding
+    head = next(line for line in out.splitlines() if "why not" in line)
+    assert head.endswith("why not") and next(line for line in out.splitlines() if line.strip().startswith("700")
+                                             ).endswith("0.5000  -")
     spm_cells = [line.split()[0] for line in out.splitlines() if line.strip().startswith(("700", "1000"))]
     assert spm_cells == ["700", "1000"]  # one format per column: not 700.0 beside 1000
 

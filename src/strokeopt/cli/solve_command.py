@@ -118,11 +118,15 @@ def _sweep(args, problem, sweep: list, progress) -> int:
                        "rows": rows, "fastest_feasible_spm": best, "fastest_feasible_is_sweep_end": at_end}))
     else:
         cycle = problem.cycle  # the machine's cycle: stitch, pick (io/cycle.py)
-        print(format_table(rows, [("spm", cycle.rate_unit), ("feasible", "feasible"), ("objective_value", "objective"),
-                                  ("motor", "motor"), ("pulley_teeth", "z"), ("peak_torque_N_m", "peak N m"),
-                                  ("rms_torque_N_m", "RMS N m"), ("solve_time_s", "solve time s"),
+        unit = next((r["objective_unit"] for r in rows if r.get("objective_unit")), "")
+        print(format_table(rows, [("spm", cycle.rate_unit), ("feasible", "feasible"),
+                                  ("objective_value", f"objective {unit}".strip()), ("motor", "motor"),
+                                  ("pulley_teeth", "z"), ("peak_torque_N_m", "peak N m"), ("rms_torque_N_m", "RMS N m"),
+                                  ("handover_error_mm", "handover mm"), ("solve_time_s", "solve + verify s"),
                                   ("reason", "why not")],
-                           title=f"{problem.name}: optimal design over the {cycle.rate_name} ({_chained(runner)})"))
+                           title=f"{problem.name}: optimal design over the {cycle.rate_name} ({_chained(runner)}); "
+                                 "feasible: within every limit, its handover error from the full servo simulation, "
+                                 "and verified in its contact scenes", text=("reason",)))
         print(f"\nno feasible {cycle.rate_name} in the sweep" if best is None else
               f"\nfastest feasible {cycle.rate_name}: >= {cycle.rate(best)} (the end of the sweep; every rate was "
               "feasible)" if at_end else f"\nfastest feasible {cycle.rate_name}: {cycle.rate(best)}")

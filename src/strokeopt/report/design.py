@@ -230,7 +230,7 @@ def impact_study_text(report: dict) -> str:
             ("solve_time_s", "solve + verify s"), ("why", "why not")]
     title = (f"{report['problem']} at {report['spm']:g} spm: {report['objective']} under each impact-velocity limit "
              f"(each design re-simulated in its contact model)")
-    return format_table(table, cols, title=title)
+    return format_table(table, cols, title=title, text=("why",))
 
 
 #: What an objective's value is, for an axis label.

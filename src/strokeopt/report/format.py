@@ -39,17 +39,23 @@ def column_format(values: list, digits: int = 4):
     return lambda x: f"{float(x):.{decimals}f}" if _is_number(x) else format_value(x)
 
 
-def format_table(rows: list[dict], columns: list[tuple[str, str]], title: str = "") -> str:
+def format_table(rows: list[dict], columns: list[tuple[str, str]], title: str = "", text: tuple = ()) -> str:
     """A plain-text table. ``columns``: (key, header) pairs; headers carry units; one number
-    format per column (:func:`column_format`)."""
+    format per column (:func:`column_format`); the columns whose keys are in ``text`` (sentences: a reason)
+    are aligned left, so a long sentence in one row does not push the others' cells right."""
     formats = [column_format([r.get(k) for r in rows]) for k, _ in columns]
     cells = [[fmt(r.get(k)) for (k, _), fmt in zip(columns, formats)] for r in rows]
     heads = [h for _, h in columns]
     widths = [max([len(h)] + [len(c[i]) for c in cells]) for i, h in enumerate(heads)]
+    left = [k in text for k, _ in columns]
+
+    def line(parts) -> str:
+        return "  ".join(p.ljust(w) if lj else p.rjust(w) for p, w, lj in zip(parts, widths, left)).rstrip()
+
     lines = [title] if title else []
-    lines.append("  ".join(h.rjust(w) for h, w in zip(heads, widths)))
+    lines.append(line(heads))
     lines.append("  ".join("-" * w for w in widths))
-    lines += ["  ".join(c.rjust(w) for c, w in zip(row, widths)) for row in cells]
+    lines += [line(row) for row in cells]
     return "\n".join(lines)
 
 

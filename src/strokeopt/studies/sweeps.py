@@ -72,7 +72,7 @@ def _sweep_verify(shared, spm: float, payload) -> dict:
     d = verified.design
     if not verified.ok:
         return {"spm": float(spm), "feasible": False, "reason": verified.verdict, "solve_time_s": seconds}
-    return {"spm": float(spm), "feasible": True, "objective_value": d.objective_value,
+    return {"spm": float(spm), "feasible": True, "objective_value": d.objective_value, "objective_unit": d.objective_unit,
             "motor": d.motor, "pulley_teeth": d.pulley_teeth, "peak_torque_N_m": d.check_value("peak_torque"),
             "rms_torque_N_m": d.check_value("rms_torque"),
             "handover_error_mm": None if verified.accuracy is None else verified.accuracy.handover_error * 1e3,
