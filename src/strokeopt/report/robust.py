@@ -6,7 +6,7 @@ from .format import format_table
 
 #: The result columns of the tables: (key, heading).
 COLUMNS = (("handover_error_mm", "handover mm"), ("max_lag_mm", "lag mm"), ("impact_velocity_m_s", "impact m/s"),
-           ("peak_torque", "peak N m"))
+           ("peak_torque_N_m", "peak N m"))
 
 
 def robust_text(report: dict) -> str:
@@ -26,7 +26,8 @@ def robust_text(report: dict) -> str:
               "failed_text": ", ".join(r.get("failed", [])) or "-"} for r in report["worst"]]
     cols = [("sample", "sample")] + [(f"p{i}", f) for i, f in enumerate(fields)] + \
         [c for c in COLUMNS if any(c[0] in r for r in worst)] + [("failed_text", "fails")]
-    lines += ["", format_table(worst, cols, title="the worst samples")]
+    lines += ["", format_table(worst, cols, title="the worst samples (the most limits failed first, then the largest "
+                                                  "handover error)")]
     sens = report["sensitivity"]
     cols = [("field", "tolerance")] + [c for c in COLUMNS if any(c[0] in s for s in sens)]
     lines += ["", format_table(sens, cols, title="which tolerances matter: Spearman rank correlation with each "
@@ -46,18 +47,18 @@ def plot_robust(report: dict, path, limits: dict | None = None):
     limits = limits or {}
     rows = report["rows"]
     fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), layout="constrained")
-    for ax, (key, label) in zip(axes[:2], (("handover_error_mm", "handover error [mm]"),
-                                           ("impact_velocity_m_s", "impact velocity [m/s]"))):
+    for ax, (key, label, unit) in zip(axes[:2], (("handover_error_mm", "handover error [mm]", "mm"),
+                                                 ("impact_velocity_m_s", "impact velocity [m/s]", "m/s"))):
         values = np.array([r[key] for r in rows if isinstance(r.get(key), (int, float))], float)
         if values.size:
             ax.hist(values, bins=min(40, max(8, values.size // 10)), color="#4c72b0")
         limit = limits.get(key)
         if limit is not None and values.size and limit <= 2 * values.max():
-            ax.axvline(limit, color="#c44e52", label=f"limit {limit:g}")
+            ax.axvline(limit, color="#c44e52", label=f"limit {limit:g} {unit}")
             ax.legend(loc="upper right")
         elif limit is not None:  # far beyond the samples: named, not drawn (the samples would shrink to a line)
-            ax.set_title(f"limit {limit:g}, {limit / values.max():.1f} x the largest sample" if values.size
-                         else f"limit {limit:g}", fontsize=9)
+            ax.set_title(f"limit {limit:g} {unit}, {limit / values.max():.1f} x the largest sample" if values.size
+                         else f"limit {limit:g} {unit}", fontsize=9)
         ax.set_xlabel(label)
         ax.set_ylabel("samples")
     sens = report["sensitivity"]

@@ -174,6 +174,10 @@ def _sample_step(shared, item, warm):
 SAMPLE_SCENE_OPTIONS = SimulationOptions(peaks=False)
 
 
+#: The drive checks a sample reports, by their keys in its row (the unit in the name).
+DRIVE_RESULTS = {"peak_torque": "peak_torque_N_m", "rms_torque": "rms_torque_N_m", "belt_tension": "belt_tension_N"}
+
+
 def judge_sample(design, overrides: list[str]) -> dict:
     """The design's stroke on its problem with ``overrides``: handover error, lag, impact velocity, premature
     release, peak torque and belt checks, ``ok`` when every judged limit holds and ``failed`` naming the rest."""
@@ -197,8 +201,8 @@ def judge_sample(design, overrides: list[str]) -> dict:
         if c["ok"] is False and c["criterion"] != "handover accuracy":
             failed.append(c["criterion"])
     for check in _drive_checks(sampled):
-        if check.name in ("peak_torque", "belt_tension", "rms_torque"):
-            row[f"{check.name}"] = float(check.value)
+        if check.name in DRIVE_RESULTS:
+            row[DRIVE_RESULTS[check.name]] = float(check.value)
             if not check.ok:
                 failed.append(check.name)
     row.update(ok=not failed, failed=failed)
@@ -228,7 +232,7 @@ def wilson_interval(successes: int, n: int, z: float = 1.959964) -> tuple[float,
 
 
 #: The results a sensitivity is given for (the ones the scatter moves and a limit may judge).
-RESPONSES = ("handover_error_mm", "max_lag_mm", "impact_velocity_m_s", "peak_torque")
+RESPONSES = ("handover_error_mm", "max_lag_mm", "impact_velocity_m_s", "peak_torque_N_m")
 
 
 def summarise(rows: list[dict], tolerances: list[Tolerance], design, method: str, seed: int) -> dict:
