@@ -148,8 +148,8 @@ def _settings_notes(settings: DesignSettings, free: list, nlp, drive) -> list[st
                      f"jerk_max_from_law = {settings.jerk_law_spm:g}), in m/s^3 at every rate (" + ", ".join(
                          f"move {mv.index} {mv.jerk_bound:.4g}" for mv in nlp.request.moves) + ")")
     if settings.torque_reserve and drive is not None:
-        notes.append(f"torque reserve: the design uses at most {100 * (1 - settings.torque_reserve):g} % of "
-                     f"the torque limit, {100 * settings.torque_reserve:g} % kept in reserve for the servo "
+        notes.append(f"torque reserve: the design uses at most {100 * (1 - settings.torque_reserve):.3g} % of "
+                     f"the torque limit, {100 * settings.torque_reserve:.3g} % kept in reserve for the servo "
                      "loop ([design] torque_reserve_pct)")
     return notes
 

@@ -161,11 +161,11 @@ class DriveModel:
         if rated is None:
             peak_what = (f"peak_torque (pull-out torque at standstill / safety factor "
                          f"{drive.limits.pull_out_safety_factor:g}, {motor_name}: {'%.3g' % peak_num} N m"
-                         f"{', %g %% kept in reserve' % (100 * reserve) if reserve else ''})")
+                         f"{', %.3g %% kept in reserve' % (100 * reserve) if reserve else ''})")
         else:
             peak_what = (f"peak_torque (peak torque, {motor_name}: {'%.3g' % peak_num} N m"
                          f"{', drive limit %g %% of rated' % drive.limits.peak_limit_pct if pct * rated_num * (1 - reserve) < peak_num + 1e-12 and not choice.candidates else ''}"
-                         f"{', %g %% kept in reserve' % (100 * reserve) if reserve else ''})")
+                         f"{', %.3g %% kept in reserve' % (100 * reserve) if reserve else ''})")
         period = b.param("period", lambda r: r.period) * g.time_scale
         out = cls(radius, r_ref, inertia, trans, rotor, peak_lim, rated, speed, peak_num, rated_num, speed_num,
                   motor_name, peak_what, drive.tau_ref, period)
