@@ -341,7 +341,7 @@ def _one_accuracy(problem, acc: float, resolution: float, lowest: float, spm0: f
         say(tag, f"{top:.1f} spm: {hi.reason}")
     for _ in range(RESERVE_STEPS):
         res = hi.result
-        if hi.ok or not res.torque_limited or res.handover_error > acc:
+        if hi.ok or not res.torque_limited:
             break
         # the loop's torque command passes the limit the rigid load meets: keep the excess in reserve
         reserve = more_reserve(reserve, res)
