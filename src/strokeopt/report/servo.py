@@ -128,7 +128,9 @@ def tradeoff_text(report: dict) -> str:
             "with the torque command within its limit; rejected: the rate above that failed (its error where it "
             "was simulated; '-': no higher rate was tried, the binding limit is the design's own)\n"
             "binding limit: torque_limit = the servo's torque command, peak_torque / rms_torque = the design's "
-            "rigid-load checks, handover_accuracy = the simulated error")
+            "rigid-load checks, handover_accuracy = the simulated error\n"
+            "max spm: the classic law meets the accuracy there and at every lower rate; the optimal stroke is solved "
+            "for that rate (a lower rate needs its own solve: the error rises and falls with the rate)")
     columns = [("accuracy_mm", "accuracy mm"), ("stroke", "stroke"), ("max_spm", "max spm"), ("binding", "binding limit"),
                ("confirmed_spm", "confirmed at spm"), ("handover_error_mm", "error there mm"),
                ("failed_spm", "rejected at spm"), ("failed_error_mm", "error at rejected mm")]
