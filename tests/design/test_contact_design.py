@@ -360,6 +360,7 @@ def test_impact_study_json_and_figure(write_problem, capsys, tmp_path, monkeypat
     assert main([*argv, "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["status"] == "ok" and data["study"] == "impact"
+    assert data["runner"].startswith("warm-started")  # where it ran: this process, or each worker's run of limits
     rows = data["rows"]
     assert [r["impact_velocity_max_m_s"] for r in rows] == pytest.approx([1.6, 2.25, 2.9])
     assert all(r["feasible"] and r["verified"] for r in rows)

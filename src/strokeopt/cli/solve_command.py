@@ -115,7 +115,8 @@ def _sweep(args, problem, sweep: list, progress) -> int:
     if args.json:
         _emit(to_json({"status": "ok" if best is not None else "infeasible", "problem": problem.name,
                        "objective": args.objective or (problem.design.objective if problem.design else None),
-                       "rows": rows, "fastest_feasible_spm": best, "fastest_feasible_is_sweep_end": at_end}))
+                       "runner": _chained(runner), "rows": rows, "fastest_feasible_spm": best,
+                       "fastest_feasible_is_sweep_end": at_end}))
     else:
         cycle = problem.cycle  # the machine's cycle: stitch, pick (io/cycle.py)
         unit = next((r["objective_unit"] for r in rows if r.get("objective_unit")), "")
@@ -218,12 +219,14 @@ def _impact_study(args, problem, progress) -> int:
     from ..report.format import to_json
 
     velocities = _impact_range(args.impact_range)
-    rows = impact_study(problem, velocities, objective=args.objective, runner=_runner(args, len(velocities)),
+    runner = _runner(args, len(velocities))
+    rows = impact_study(problem, velocities, objective=args.objective, runner=runner,
                         progress=progress and (lambda it: progress(it, "limit")))
     good = [r for r in rows if r["feasible"] and r.get("verified") is not False]
     objective = _objective(args, problem)
     report = {"status": "ok" if good else "infeasible", "problem": problem.name, "spm": problem.spm,
-              "study": "impact", "objective": objective, "drive": drive_used(args, problem), "rows": rows}
+              "study": "impact", "objective": objective, "drive": drive_used(args, problem),
+              "runner": _chained(runner).replace("rates", "limits"), "rows": rows}
     if args.json:
         _emit(to_json(report))
     else:

@@ -229,7 +229,8 @@ def impact_study_text(report: dict) -> str:
             ("simulated_impact_velocity_m_s", "simulated m/s"), ("max_lag_mm", "lag mm"), ("verified", "verified"),
             ("solve_time_s", "solve + verify s"), ("why", "why not")]
     title = (f"{report['problem']} at {report['spm']:g} spm: {report['objective']} under each impact-velocity limit "
-             f"(each design re-simulated in its contact model)")
+             f"(each design re-simulated in its contact model" + (f"; {report['runner']})" if report.get("runner")
+                                                                   else ")"))
     return format_table(table, cols, title=title, text=("why",))
 
 
