@@ -180,9 +180,11 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
     answers it with its confirmed design where that meets it, or, where ``min_time`` found no design, gives the
     start of one more solve here: the answer is the same whichever accuracies are asked (0.03 mm alone is solved
     from the 0.05 mm rung's design, as in the default list). Last, a tighter accuracy's rate is given to every
-    looser one below it (its design meets them): a tighter accuracy never gets a higher rate than a looser one. The motor and pulley are the
-    problem's (``drive.motor``, ``pulley_teeth``), as for the classic law, so the two curves compare strokes on
-    one drive. ``progress(step, text)`` is called once per step (a line per solve or simulation; on workers
+    looser one below it (its design meets them): a tighter accuracy never gets a higher rate than a looser one.
+    ``starts`` > 1: each accuracy from that many start rates (:func:`start_rates`, over one period of the belt
+    mode's phase in the handover window), each a task; the highest confirmed rate is kept and the point records
+    what each start confirmed (:attr:`TradeoffPoint.start_spm`). The motor and pulley are the problem's
+    (``drive.motor``, ``pulley_teeth``), as for the classic law, so the two curves compare strokes on one drive. ``progress(step, text)`` is called once per step (a line per solve or simulation; on workers
     the lines are printed on the workers' standard error).
     """
     from .runner import run_study
