@@ -130,6 +130,7 @@ def test_tradeoff_classic_json_and_plot(capsys, reference_path, tmp_path):
     (["--starts", "0"], "--starts: expected a whole number of starts per accuracy in 1..12, got '0'"),
     (["--starts", "13"], "--starts: expected a whole number of starts per accuracy in 1..12"),
     (["--starts", "two"], "--starts: expected a whole number"),
+    (["--starts", "3"], "--starts: is for the optimal stroke"),  # with --strokes classic (below)
 ])
 def test_tradeoff_bad_options_exit_2(capsys, reference_path, args, words):
     assert main(["tradeoff", str(reference_path), "--strokes", "classic", "--plot", "none", *args]) == 2

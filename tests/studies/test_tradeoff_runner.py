@@ -68,8 +68,10 @@ def test_the_best_start_is_kept_and_how_many_reached_it_is_said():
     out = point.as_dict()
     assert out["starts"] == 4 and out["starts_at_best"] == 2 and out["start_max_spm"] == [640.0, 650.0, None, 650.0]
     text = tradeoff_text({"problem": "P", "motor": "M", "pulley_teeth": 28, "law": "ms", "resolution_spm": 10,
-                          "torque_basis": "", "starts": 4, "points": [out]})
-    assert "2 of 4" in text and "640 650 - 650" in text and "starts at best" in text
+                          "torque_basis": "", "starts": 4, "start_rates_spm": [500.0, 509.4, 519.2, 529.4],
+                          "points": [out]})
+    assert "2 of 4" in text and "640 650 - 650" in text and "starts at best" in text and "confirmed per start" in text
+    assert "(500.0, 509.4, 519.2, 529.4 spm)" in text and "the classic law" not in text  # no classic row here
     # no start found a design: no design, the first start's point (the next looser accuracy's design answers it)
     point, trial, no_design = _best_start([row(None, None, True), row(None, None, True)])
     assert trial is None and no_design and point.starts_at_best is None

@@ -202,6 +202,9 @@ def cmd_tradeoff(args) -> int:
     if starts is None or not 1 <= starts <= STARTS_MAX:
         raise ProblemError("--starts", "", f"expected a whole number of starts per accuracy in 1..{STARTS_MAX}, got "
                                            f"{args.starts!r}")
+    if starts > 1 and args.strokes == "classic":
+        raise ProblemError("--starts", "", "is for the optimal stroke (--strokes optimal or both): the classic law's "
+                                           "rates are simulated, not solved from a start")
     runner = study_runner(args.workers, args.scheduler, tasks=len(accuracies or DEFAULT_ACCURACIES_MM) * starts)
     if args.strokes == "classic":
         runner = None  # the classic law alone starts no worker (the options were still checked)

@@ -125,7 +125,8 @@ def _sweep(args, problem, sweep: list, progress) -> int:
                                   ("pulley_teeth", "z"), ("peak_torque_N_m", "peak N m"), ("rms_torque_N_m", "RMS N m"),
                                   ("handover_error_mm", "handover mm"), ("solve_time_s", "solve + verify s"),
                                   ("reason", "why not")],
-                           title=f"{problem.name}: optimal design over the {cycle.rate_name} ({_chained(runner)}); "
+                           title=f"{problem.name}: optimal design ({_objective(args, problem)}) over the "
+                                 f"{cycle.rate_name} ({_chained(runner)}); "
                                  "feasible: within every limit, its handover error from the full servo simulation, "
                                  "and verified in its contact scenes", text=("reason",)))
         print(f"\nno feasible {cycle.rate_name} in the sweep" if best is None else

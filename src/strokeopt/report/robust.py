@@ -28,7 +28,8 @@ def robust_text(report: dict) -> str:
         [c for c in COLUMNS if any(c[0] in r for r in worst)] + [("failed_text", "fails")]
     lines += ["", format_table(worst, cols, title="the worst samples (the most limits failed first, then the largest "
                                                   "handover error)")]
-    sens = report["sensitivity"]
+    sens = [{k: f"{v:+.3f}" if isinstance(v, float) else v for k, v in s.items()}  # one format: correlations
+            for s in report["sensitivity"]]
     cols = [("field", "tolerance")] + [c for c in COLUMNS if any(c[0] in s for s in sens)]
     lines += ["", format_table(sens, cols, title="which tolerances matter: Spearman rank correlation with each "
                                                  "result (+1: rises with the part's value, 0: no effect)")]
@@ -43,6 +44,7 @@ def plot_robust(report: dict, path, limits: dict | None = None):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import numpy as np
+    from matplotlib.ticker import MaxNLocator
 
     limits = limits or {}
     rows = report["rows"]
@@ -61,6 +63,7 @@ def plot_robust(report: dict, path, limits: dict | None = None):
                          else f"limit {limit:g} {unit}", fontsize=9)
         ax.set_xlabel(label)
         ax.set_ylabel("samples")
+        ax.yaxis.set_major_locator(MaxNLocator(integer=True))  # a count: whole numbers
     sens = report["sensitivity"]
     keys = [k for k, _ in COLUMNS if any(k in s for s in sens)]
     width = 0.8 / max(1, len(keys))
@@ -70,6 +73,7 @@ def plot_robust(report: dict, path, limits: dict | None = None):
     axes[2].set_yticks(y + width * (len(keys) - 1) / 2, [s["field"].split(".")[-2] + "." + s["field"].split(".")[-1]
                                                          if s["field"].count(".") else s["field"] for s in sens])
     axes[2].set_xlim(-1, 1)
+    axes[2].set_xticks([-1, -0.5, 0, 0.5, 1])  # not crowded at any figure width
     axes[2].set_xlabel("Spearman rank correlation [-]")
     axes[2].legend(loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=len(keys), fontsize=8)
     fig.suptitle(f"{report['problem']}, {report['spm']:g} spm: yield {100 * report['yield']:.1f} % of "

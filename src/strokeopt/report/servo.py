@@ -128,22 +128,27 @@ def tradeoff_text(report: dict) -> str:
             "with the torque command within its limit; rejected: the rate above that failed (its error where it "
             "was simulated; '-': no higher rate was tried, the binding limit is the design's own)\n"
             "binding limit: torque_limit = the servo's torque command, peak_torque / rms_torque = the design's "
-            "rigid-load checks, handover_accuracy = the simulated error\n"
-            "max spm: the classic law meets the accuracy there and at every lower rate; the optimal stroke is solved "
-            "for that rate (a lower rate needs its own solve: the error rises and falls with the rate)")
+            "rigid-load checks, handover_accuracy = the simulated error")
+    kinds = {p["stroke"] for p in report["points"]}
+    meaning = ([] if kinds <= {"optimal"} else ["the classic law meets the accuracy there and at every lower rate"]) + (
+        ["the optimal stroke is solved for that rate (a lower rate needs its own solve: the error rises and falls "
+         "with the rate)"] if "optimal" in kinds else [])
+    head += "\nmax spm: " + "; ".join(meaning)
     columns = [("accuracy_mm", "accuracy mm"), ("stroke", "stroke"), ("max_spm", "max spm"), ("binding", "binding limit"),
                ("confirmed_spm", "confirmed at spm"), ("handover_error_mm", "error there mm"),
                ("failed_spm", "rejected at spm"), ("failed_error_mm", "error at rejected mm")]
     points = report["points"]
     starts = report.get("starts", 1)
     if starts > 1:  # the optimal stroke from several start rates: how many reached the answer, what each found
+        rates = ", ".join(f"{r:.1f}" for r in report.get("start_rates_spm", []))
         head += (f"\nstarts: each accuracy of the optimal stroke solved from {starts} start rates over one period of "
-                 "the belt mode's phase; 'starts at best': how many confirmed the answer's rate, 'start rates': the "
-                 "rate each confirmed ('-': none; 0 at best: the answer came from the next looser accuracy's design)")
+                 f"the belt mode's phase ({rates} spm); 'starts at best': how many confirmed the answer's rate, "
+                 "'confirmed per start': the rate each start confirmed, on the grid ('-': none; '0 of K' at best: the "
+                 "answer came from the next looser accuracy's design)")
         points = [{**p, "starts at best": "" if "starts" not in p else f"{p['starts_at_best']} of {p['starts']}",
-                   "start rates": " ".join("-" if r is None else f"{r:g}" for r in p.get("start_max_spm", []))}
+                   "per start": " ".join("-" if r is None else f"{r:g}" for r in p.get("start_max_spm", []))}
                   for p in points]
-        columns += [("starts at best", "starts at best"), ("start rates", "start rates")]
+        columns += [("starts at best", "starts at best"), ("per start", "confirmed per start")]
     return head + "\n\n" + format_table(points, columns)
 
 

@@ -417,5 +417,6 @@ def tradeoff(problem, accuracies=None, *, strokes: str = "both", resolution: flo
                                    starts=starts)
     return {"problem": problem.name, "motor": problem.drive.motor, "pulley_teeth": problem.pulley_teeth,
             "law": problem.default_law.label, "resolution_spm": resolution, "torque_basis": TORQUE_BASIS,
-            "starts": starts,
+            "starts": starts, **({"start_rates_spm": [round(r, 1) for r in start_rates(problem, problem.spm, starts)]}
+                                 if strokes != "classic" and starts > 1 else {}),
             "points": [p.as_dict() for p in points]}
