@@ -227,7 +227,7 @@ def _impact_study(args, problem, progress) -> int:
     objective = _objective(args, problem)
     report = {"status": "ok" if good else "infeasible", "problem": problem.name, "spm": problem.spm,
               "study": "impact", "objective": objective, "drive": drive_used(args, problem),
-              "runner": _chained(runner).replace("rates", "limits"), "rows": rows}
+              "runner": _chained(runner, "limits"), "rows": rows}
     if args.json:
         _emit(to_json(report))
     else:
@@ -250,11 +250,11 @@ def _runner(args, tasks: int | None = None):
     return study_runner(args.workers, args.scheduler, tasks=tasks)
 
 
-def _chained(runner) -> str:
-    """How a study's points were warm-started, for its title."""
+def _chained(runner, points: str = "rates") -> str:
+    """How a study's ``points`` (rates, limits) were warm-started, for its title and JSON."""
     if runner.in_process:
         return "warm-started, in this process"
-    return f"warm-started within each worker's run of rates, on {runner.describe()}"
+    return f"warm-started within each worker's run of {points}, on {runner.describe()}"
 
 
 def _report_failed_tasks(rows: list[dict], key: str, unit: str) -> bool:
