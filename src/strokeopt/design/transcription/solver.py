@@ -157,6 +157,32 @@ def solve_nlp(nlp, options: dict):
     return sol, stats, solver
 
 
+#: A constraint row with more nonzeros than this in its Jacobian is dense (the servo term's handover rows: every
+#: node acceleration of the moves), and its group of rows gets a Jacobian of its own (:func:`constraint_jacobian`).
+DENSE_ROW = 64
+
+
+def constraint_jacobian(groups: list, w, p) -> ca.Function:
+    """IPOPT's constraint Jacobian (CasADi's ``nlp_jac_g``: ``(x, p) -> (g, jac_g_x)``) of the rows ``groups`` (the
+    :class:`~.nlp.Built`'s ``g``, in order), differentiated group by group where a group has a dense row.
+    CasADi's Jacobian of all rows at once colours them together, and the dense rows then need one sweep through
+    every row's graph each: the handover accuracy's 200 rows took 5-8 ms of every IPOPT iteration (a third of a
+    held solve), apart 1 ms. The same numbers, the same sparsity."""
+    blocks, run = [], []
+    for rows in groups:
+        sparsity = ca.jacobian_sparsity(rows, w)
+        dense = sparsity.nnz() > 0 and int(np.max(np.diff(np.asarray(sparsity.T.colind())))) > DENSE_ROW
+        if dense:
+            blocks += [ca.vertcat(*run)] if run else []
+            blocks.append(rows)
+            run = []
+        else:
+            run.append(rows)
+    blocks += [ca.vertcat(*run)] if run else []
+    jac = ca.vertcat(*[ca.jacobian(rows, w) for rows in blocks]) if blocks else ca.MX(0, w.shape[0])
+    return ca.Function("nlp_jac_g", [w, p], [ca.vertcat(*groups), jac], ["x", "p"], ["g", "jac_g_x"])
+
+
 def _solve(nlp, options: dict, x0=None):
     g = nlp.graph
     b = g.built
@@ -177,6 +203,8 @@ def _solve(nlp, options: dict, x0=None):
                 offset, count = b.offsets[found[0]]
                 discrete[offset:offset + count] = True
                 opts["discrete"] = discrete.tolist()
+        if "jac_g" not in opts:
+            opts["jac_g"] = constraint_jacobian(b.g, w, p)
         solver = ca.nlpsol("design", plugin, {"x": w, "f": g.f, "g": gs, "p": p}, opts)
         g.solvers[key] = solver
     nums = nlp.numbers
