@@ -126,7 +126,8 @@ def tradeoff_text(report: dict) -> str:
             f"rates to {report['resolution_spm']:g} spm)\n{report['torque_basis']}\n"
             "confirmed: the full servo simulation meets the accuracy there (within the design's check tolerance) "
             "with the torque command within its limit; rejected: the rate above that failed (its error where it "
-            "was simulated; '-': no higher rate was tried, the binding limit is the design's own)\n"
+            "was simulated; '-': no higher rate was tried, the binding limit is the design's own; without a rate: the "
+            "lowest rate tried, for the optimal stroke the problem's own with its most accurate stroke)\n"
             "binding limit: torque_limit = the servo's torque command, peak_torque / rms_torque = the design's "
             "rigid-load checks, handover_accuracy = the simulated error")
     kinds = {p["stroke"] for p in report["points"]}

@@ -8,7 +8,7 @@ import math
 from dataclasses import dataclass, replace
 
 from ..drive.checks import within_limit
-from ..errors import SolverError
+from ..errors import LimitError, SolverError
 from ..servo.accuracy import handover_accuracy
 
 
@@ -165,3 +165,19 @@ def search_below(problem, hi: Trial, settings, acc: float, resolution: float, lo
         if math.isfinite(t.excess):
             last.append(t)
     return lo, hi
+
+
+def least_error(problem, settings, spm: float, acc: float) -> Trial:
+    """What an accuracy without a rate misses by: the most accurate stroke at ``spm`` (:data:`SEARCH_OBJECTIVE`,
+    the drive of ``settings``) and its full simulation. Where the design finds its least error above the accuracy
+    (the usual case: it then has no design to simulate), the trial's result is None and its ``excess`` that error's
+    (the design's exact term at its solution: the simulation's error at the window's checked instants)."""
+    from ..design.solve import solve_design
+
+    try:
+        design = solve_design(problem, objective=SEARCH_OBJECTIVE, spm=spm, settings=settings)
+    except LimitError as exc:
+        return Trial(spm, exc.excess, exc.reason)
+    except SolverError as exc:
+        return Trial(spm, math.inf, exc.reason)
+    return confirm(problem, design, spm, acc)

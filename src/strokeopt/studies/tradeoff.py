@@ -20,8 +20,8 @@ from ..servo.accuracy import TORQUE_BASIS, handover_accuracy
 from ..servo.loop import tuned_gains
 from ..servo.plant import axis_from_problem
 from ..servo.settings import settings_of, shortest_move
-from .confirm import (RATE_BRACKET, RESERVE_STEPS, Trial, binding_of, confirm, failed_fields, more_reserve,
-                      search_below)
+from .confirm import (RATE_BRACKET, RESERVE_STEPS, Trial, binding_of, confirm, failed_fields, least_error,
+                      more_reserve, search_below)
 
 
 # --------------------------------------------------------------------------- what accuracy costs in time
@@ -252,6 +252,9 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
         return answers[acc]
 
     points = {acc: answer(acc)[0] for acc in loosest_first}
+    for acc, point in points.items():
+        if point.max_spm is None:  # no rate: what the most accurate stroke at the problem's rate misses it by
+            points[acc] = _no_rate(problem, point, spm0, progress or _quiet)
     best = None  # tightest first: a tighter accuracy's design meets every looser one
     for acc in accuracies:
         if best is not None and (points[acc].max_spm is None or points[acc].max_spm < best.max_spm):
@@ -259,6 +262,34 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
         elif points[acc].max_spm is not None:
             best = points[acc]
     return [points[a] for a in accuracies]
+
+
+def _no_rate(problem, point: TradeoffPoint, spm0: float, say) -> TradeoffPoint:
+    """An accuracy without a confirmed rate, answered with the most accurate stroke at ``spm0`` (:func:`least_error`):
+    the error it reaches there (the rejected rate's fields), or the rate where the simulation confirms it."""
+    acc = point.accuracy
+    t = least_error(problem, _fixed_drive(problem, acc), spm0, acc)
+    if t.ok:  # min_time found no design, but the most accurate stroke at the problem's rate meets it
+        say(_tag(acc), f"{spm0:g} spm: the most accurate stroke meets it ({t.result.handover_error * 1e3:.4f} mm)")
+        return replace(point, max_spm=math.floor(spm0 + 1e-9), confirmed_spm=spm0, handover_error=t.result.handover_error,
+                       detail=f"{point.detail}; the most accurate stroke at {spm0:g} spm meets it")
+    error = t.result.handover_error if t.result is not None else (acc * (1 + t.excess) if math.isfinite(t.excess) else None)
+    if error is None:
+        say(_tag(acc), f"{spm0:g} spm: no most accurate stroke ({t.reason.splitlines()[0]})")
+        return point
+    say(_tag(acc), f"{spm0:g} spm: the most accurate stroke reaches {error * 1e3:.4f} mm")
+    return replace(point, binding="handover_accuracy", failed_spm=spm0, failed_error=error,
+                   failed_reason=f"the most accurate stroke at {spm0:g} spm reaches {error * 1e3:.4f} mm",
+                   detail=f"no rate: the most accurate stroke at {spm0:g} spm reaches {error * 1e3:.4f} mm ({point.detail})")
+
+
+def _fixed_drive(problem, acc: float):
+    """The design settings of one accuracy of the optimal stroke: the problem's motor and pulley (the classic law's
+    drive), the accuracy held, ``min_time``'s rate bracket."""
+    from ..design.transcription.settings import DesignSettings
+
+    base = problem.design or DesignSettings()
+    return replace(base, accuracy=acc, motor_choice="fixed", pulley="fixed", rate_bracket=RATE_BRACKET)
 
 
 def _quiet(step, text) -> None:
@@ -321,14 +352,10 @@ def _best_start(rows: list) -> tuple:
 def _one_accuracy(problem, acc: float, resolution: float, lowest: float, spm0: float, say, looser=None, tag=None):
     """The highest confirmed rate at one accuracy: ``(point, confirmed trial or None, min_time found no design)``;
     ``looser``: a looser accuracy's confirmed trial, the last start of :func:`_min_time`; ``tag``: of the lines."""
-    from ..design.transcription.settings import DesignSettings
     from ..design.solve import solve_design
 
-    base = problem.design or DesignSettings()
-    reserve = base.torque_reserve
-    # the same drive as the classic law: the problem's motor and pulley
-    settings = replace(base, accuracy=acc, motor_choice="fixed", pulley="fixed", torque_reserve=reserve,
-                       rate_bracket=RATE_BRACKET)
+    settings = _fixed_drive(problem, acc)  # the same drive as the classic law: the problem's motor and pulley
+    reserve = settings.torque_reserve
     tag = tag or _tag(acc)
     try:
         d = _min_time(problem, spm0, settings, looser, lambda text: say(tag, text))

@@ -231,7 +231,8 @@ class ErrorTerm(Protocol):
       (:class:`~strokeopt.design.nlp.Graph`: ``nlp.request``, ``nlp.built.params``, ``nlp.si``), or
       None when the term does not apply to this problem. Numbers that change between solves enter
       as parameters, functions of the solve's :class:`SolveRequest` (its ``cache`` holds what they
-      compute once per solve).
+      compute once per solve). ``nlp.request.terms_minimised``: the objective is built from the terms
+      (``min_handover_error``), so a term that holds a subset of its instants holds them all.
     """
 
     name: str
@@ -267,6 +268,16 @@ class SolveRequest:
     pin_times: dict | None = None
     rate_cap: bool = False
     cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    @property
+    def terms_minimised(self) -> bool:
+        """Whether the objective is built from the handover error terms (``min_handover_error``): a term then keeps
+        every instant it checks (one left out of a minimised maximum is free to grow, and did: IPOPT stopped at
+        its iteration limit), where a held accuracy may hold the largest ones alone (the solution's exact check
+        sees the rest)."""
+        from .objectives import needs_terms
+
+        return needs_terms(self.objective)
 
     @cached_property
     def moves(self) -> list[Move]:
