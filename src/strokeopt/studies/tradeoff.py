@@ -202,15 +202,20 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
             own[acc] = (replace(top_point, accuracy=acc), top, False)
     rates = start_rates(problem, spm0, starts)
 
+    least: dict = {}  # accuracy -> the most accurate stroke at the first start rate where that start found no rate
+
     def own_starts(accs) -> dict:  # each accuracy from each start rate, every pair a task of the runner
-        items = [(acc, rate) for acc in accs for rate in rates]
+        # the tightest first: they take the longest, so on workers the others fill in beside them
+        items = [(acc, rate, k == 0) for acc in sorted(accs) for k, rate in enumerate(rates)]
         outcomes = run_study(_accuracy_step, items, (problem, resolution, lowest, say, len(rates) > 1),
                              runner=runner, chained=False) if items else []
         rows = {}
         for o in outcomes:
             acc = o.item[0]
-            rows.setdefault(acc, []).append(o.row if o.ok else (
-                TradeoffPoint(acc, "optimal", None, "solver", None, o.error), None, False))
+            row = o.row if o.ok else (TradeoffPoint(acc, "optimal", None, "solver", None, o.error), None, False, None)
+            rows.setdefault(acc, []).append(row[:3])
+            if row[3] is not None:
+                least[acc] = row[3]
         return {acc: _best_start(found) for acc, found in rows.items()}
 
     own.update(own_starts([acc for acc in loosest_first if acc not in own]))
@@ -254,7 +259,7 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
     points = {acc: answer(acc)[0] for acc in loosest_first}
     for acc, point in points.items():
         if point.max_spm is None:  # no rate: what the most accurate stroke at the problem's rate misses it by
-            points[acc] = _no_rate(problem, point, spm0, progress or _quiet)
+            points[acc] = _no_rate(problem, point, spm0, resolution, progress or _quiet, least.get(acc))
     best = None  # tightest first: a tighter accuracy's design meets every looser one
     for acc in accuracies:
         if best is not None and (points[acc].max_spm is None or points[acc].max_spm < best.max_spm):
@@ -264,14 +269,16 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
     return [points[a] for a in accuracies]
 
 
-def _no_rate(problem, point: TradeoffPoint, spm0: float, say) -> TradeoffPoint:
-    """An accuracy without a confirmed rate, answered with the most accurate stroke at ``spm0`` (:func:`least_error`):
-    the error it reaches there (the rejected rate's fields), or the rate where the simulation confirms it."""
+def _no_rate(problem, point: TradeoffPoint, spm0: float, resolution: float, say, least: Trial | None = None):
+    """An accuracy without a confirmed rate, answered with the most accurate stroke at ``spm0`` (``least``, the
+    :func:`least_error` of its first start's task where that found no rate; else solved here): the error it
+    reaches there (the rejected rate's fields), or the rate where the simulation confirms it."""
     acc = point.accuracy
-    t = least_error(problem, _fixed_drive(problem, acc), spm0, acc)
+    t = least if least is not None else least_error(problem, _fixed_drive(problem, acc), spm0, acc)
     if t.ok:  # min_time found no design, but the most accurate stroke at the problem's rate meets it
         say(_tag(acc), f"{spm0:g} spm: the most accurate stroke meets it ({t.result.handover_error * 1e3:.4f} mm)")
-        return replace(point, max_spm=math.floor(spm0 + 1e-9), confirmed_spm=spm0, handover_error=t.result.handover_error,
+        return replace(point, max_spm=math.floor(spm0 / resolution + 1e-9) * resolution, confirmed_spm=spm0,
+                       handover_error=t.result.handover_error,
                        detail=f"{point.detail}; the most accurate stroke at {spm0:g} spm meets it")
     error = t.result.handover_error if t.result is not None else (acc * (1 + t.excess) if math.isfinite(t.excess) else None)
     if error is None:
@@ -308,12 +315,16 @@ def _tag(acc: float) -> str:
 
 
 def _accuracy_step(shared, item, warm):
-    """One accuracy of :func:`tradeoff_optimal` from one start rate (a task; ``item`` = (accuracy, rate)): its
-    point, its confirmed trial, whether min_time found no design."""
+    """One accuracy of :func:`tradeoff_optimal` from one start rate (a task; ``item`` = (accuracy, rate, the first
+    start)): its point, its confirmed trial, whether min_time found no design, and where the first start confirms no
+    rate, the most accurate stroke at its rate (:func:`least_error`; the answer's words should nothing else give
+    one: solved here, beside the other tasks, rather than after them all)."""
     problem, resolution, lowest, say, several = shared
-    acc, spm0 = item
+    acc, spm0, first = item
     tag = _tag(acc) + (f", start {spm0:.1f} spm" if several else "")
-    return _one_accuracy(problem, acc, resolution, lowest, spm0, say, tag=tag), None
+    point, trial, no_design = _one_accuracy(problem, acc, resolution, lowest, spm0, say, tag=tag)
+    least = least_error(problem, _fixed_drive(problem, acc), spm0, acc) if trial is None and first else None
+    return (point, trial, no_design, least), None
 
 
 #: The most starts per accuracy (``strokeopt tradeoff --starts``).
