@@ -178,8 +178,9 @@ def tradeoff_optimal(problem, accuracies=None, *, resolution: float = 10.0, lowe
     depend on which others are asked. Where an accuracy's own starts confirm no rate, the next looser rung of a
     fixed ladder (:data:`DEFAULT_ACCURACIES_MM`, whether asked or not: solved the same way, here, where not asked)
     answers it with its confirmed design where that meets it, or, where ``min_time`` found no design, gives the
-    start of one more solve here: the answer is the same whichever accuracies are asked (0.03 mm alone is solved
-    from the 0.05 mm rung's design, as in the default list). Last, a tighter accuracy's rate is given to every
+    start of one more solve here: the answer is the same whichever accuracies are asked (0.02 mm alone is tried
+    from the 0.03 mm rung's design, as in the default list). An accuracy still without a rate gets the error of the
+    most accurate stroke at ``spm0`` (:func:`_no_rate`: what it misses by). Last, a tighter accuracy's rate is given to every
     looser one below it (its design meets them): a tighter accuracy never gets a higher rate than a looser one.
     ``starts`` > 1: each accuracy from that many start rates (:func:`start_rates`, over one period of the belt
     mode's phase in the handover window), each a task; the highest confirmed rate is kept and the point records
