@@ -17,8 +17,9 @@ TRADEOFF_RATIO_TARGET = 10.0
 
 
 @benchmark("tradeoff_vs_solve", "strokeopt tradeoff problems/deco2000_needle_bar.toml (every default accuracy, "
-                                "classic law and min_time continuation) against one strokeopt solve of it, both "
-                                "run as the commands, one after the other (a minute: the whole trade-off runs)",
+                                "classic law and optimal stroke, one worker per core) against one strokeopt solve "
+                                "of it, both run as the commands, one after the other (half a minute or more: the "
+                                "whole trade-off runs)",
            target_s=60.0)
 def _bench_tradeoff_vs_solve() -> BenchResult:
     path = reference_problem_path()
