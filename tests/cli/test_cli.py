@@ -85,4 +85,5 @@ def test_an_option_in_the_wrong_place_gets_the_commands_usage(capsys, reference_
     with pytest.raises(SystemExit) as exc:
         main(argv)
     err = capsys.readouterr().err
-    assert exc.value.code == 2 and f"usage: strokeopt {argv[0]}" in err and "unrecognized arguments" in err
+    assert exc.value.code == 2 and f"strokeopt {argv[0]}: error: unrecognized arguments" in err
+    assert f"(see strokeopt {argv[0]} --help)" in err and len(err.strip().splitlines()) == 1  # one line, exit 2

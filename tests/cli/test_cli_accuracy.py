@@ -131,11 +131,25 @@ def test_tradeoff_classic_json_and_plot(capsys, reference_path, tmp_path):
     (["--starts", "13"], "--starts: expected a whole number of starts per accuracy in 1..12"),
     (["--starts", "two"], "--starts: expected a whole number"),
     (["--starts", "3"], "--starts: is for the optimal stroke"),  # with --strokes classic (below)
+    (["--accuracies", ""], "--accuracies: expected comma-separated millimetres"),  # not the default list, silently
+    (["--accuracies", "0.1,0.05,0.1"], "--accuracies: 0.1 mm given twice"),
 ])
 def test_tradeoff_bad_options_exit_2(capsys, reference_path, args, words):
     assert main(["tradeoff", str(reference_path), "--strokes", "classic", "--plot", "none", *args]) == 2
     err = capsys.readouterr().err
     assert words in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--resolution", "abc"], "argument --resolution: invalid float value: 'abc'"),
+    (["--strokes", "foo"], "argument --strokes: invalid choice: 'foo'"),
+])
+def test_tradeoff_options_argparse_refuses_are_one_line_too(capsys, reference_path, args, words):
+    with pytest.raises(SystemExit) as exc:
+        main(["tradeoff", str(reference_path), "--plot", "none", *args])
+    err = capsys.readouterr().err.strip()
+    assert exc.value.code == 2 and words in err and "(see strokeopt tradeoff --help)" in err
+    assert len(err.splitlines()) == 1 and "usage:" not in err
 
 
 @pytest.mark.slow

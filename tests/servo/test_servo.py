@@ -302,14 +302,22 @@ def test_tradeoff_figure_plain_ticks_words_and_labels_inside():
            for kind, extra in (("modified_sine", 0), ("optimal", 40))
            for a, spm, b in ((0.05, 480, "handover_accuracy"), (0.1, 830, "handover_accuracy"),
                              (0.2, 850, "torque_limit"), (0.5, 850, "torque_limit"))]
+    pts.append({"accuracy_mm": 0.02, "stroke": "optimal", "max_spm": None, "binding": "handover_accuracy"})
     fig = plot_tradeoff({"problem": "p", "points": pts})
     ax = fig.axes[0]
     fig.canvas.draw()
-    assert [t.get_text() for t in ax.get_xticklabels()] == ["0.05", "0.1", "0.2", "0.5"]
+    # every accuracy asked is in view, the one without a rate too (a cross at the bottom, named in the legend)
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["0.02", "0.05", "0.1", "0.2", "0.5"]
+    lo, hi = ax.get_xlim()
+    assert lo < 0.02 and hi > 0.5
     area = ax.get_window_extent()
     for text in ax.texts:
         assert "_" not in text.get_text()
         box = text.get_window_extent()
         assert area.x0 <= box.x0 and box.x1 <= area.x1  # no label runs off the plot
-    assert {t.get_text() for t in ax.get_legend().get_texts()} == {"modified sine", "optimal"}
+    (legend,) = fig.legends
+    assert {t.get_text() for t in legend.get_texts()} == {
+        "modified sine", "optimal", "optimal: no rate at 0.02 mm (crosses at the bottom)",
+        "binds: handover accuracy", "binds: torque limit"}  # the markers' binding limits explained
+    assert legend.get_window_extent().y1 <= area.y0  # below the axes: over no point and no label
     plt.close(fig)

@@ -182,11 +182,16 @@ def cmd_tradeoff(args) -> int:
     problem = _load(args)
     require_belt_drive(problem, "tradeoff")
     accuracies = None
-    if args.accuracies:
+    if args.accuracies is not None:
         try:
             accuracies = [float(x) * 1e-3 for x in args.accuracies.split(",")]
         except ValueError:
-            raise ProblemError("--accuracies", "", f"expected comma-separated millimetres, got {args.accuracies!r}") from None
+            raise ProblemError("--accuracies", "", f"expected comma-separated millimetres (0.05,0.1), got "
+                                                   f"{args.accuracies!r}") from None
+        twice = sorted({a for a in accuracies if accuracies.count(a) > 1})
+        if twice:
+            raise ProblemError("--accuracies", "", f"{', '.join(f'{a * 1e3:g}' for a in twice)} mm given twice: give "
+                                                   "each accuracy once")
         lo, hi = ACCURACY_RANGE_MM
         if not all(lo * 1e-3 <= a <= hi * 1e-3 for a in accuracies):
             raise ProblemError("--accuracies", "", f"every accuracy must lie in [{lo:g}, {hi:g}] mm, the range of "

@@ -97,8 +97,16 @@ def _cam_table_options(p: argparse.ArgumentParser) -> None:
                    help="master axis counts per cam cycle with --master-unit counts (default 3600)")
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser with bad input in one line (the epilog's promise) and exit 2: the command, the option and
+    what is wrong, and where its help is, not the whole usage."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="strokeopt",
         description="Design servo-driven reciprocating mechanisms (electronic cams): motion laws, "
                     "kinematics, drive sizing, optimal strokes and contact-model verification.",

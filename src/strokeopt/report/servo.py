@@ -121,20 +121,26 @@ def plot_accuracy(result: AccuracyResult, path: str | Path | None = None, motor:
 
 def tradeoff_text(report: dict) -> str:
     """The text of ``strokeopt tradeoff`` from the report of :func:`~strokeopt.studies.tradeoff.tradeoff`."""
-    head = (f"{report['problem']}: highest stitch rate for a required handover accuracy "
-            f"(motor {report['motor']}, {report['pulley_teeth']}-tooth pulley; classic law {report['law']}; "
-            f"rates to {report['resolution_spm']:g} spm)\n{report['torque_basis']}\n"
-            "confirmed: the full servo simulation meets the accuracy there (within the design's check tolerance) "
-            "with the torque command within its limit; rejected: the rate above that failed (its error where it "
-            "was simulated; '-': no higher rate was tried, the binding limit is the design's own; without a rate: the "
-            "lowest rate tried, for the optimal stroke the problem's own with its most accurate stroke)\n"
-            "binding limit: torque_limit = the servo's torque command, peak_torque / rms_torque = the design's "
-            "rigid-load checks, handover_accuracy = the simulated error")
     kinds = {p["stroke"] for p in report["points"]}
+    classic = f"classic law {report['law']}; " if kinds - {"optimal"} else ""
+    tolerance = report.get("check_tolerance_pct")
+    within = "" if tolerance is None or "optimal" not in kinds else (
+        f" (the optimal stroke's within the design's check tolerance, {tolerance:g} %: between the instants the "
+        "design holds, the error may peak that much higher)")
+    head = (f"{report['problem']}: highest stitch rate for a required handover accuracy "
+            f"(motor {report['motor']}, {report['pulley_teeth']}-tooth pulley; {classic}"
+            f"rates to {report['resolution_spm']:g} spm)\n{report['torque_basis']}\n"
+            f"confirmed: the full servo simulation meets the accuracy there{within} with the torque command within "
+            "its limit; rejected: the rate above that failed (its error where it was simulated; '-': no higher rate "
+            "was tried); without a rate: the lowest rate tried, for the optimal stroke the problem's own rate with "
+            "its most accurate stroke\n"
+            "binding limit: torque_limit = the servo's torque command (the optimal stroke's design keeps a reserve "
+            "of its torque limit for it), peak_torque / rms_torque = the design's rigid-load checks, "
+            "handover_accuracy = the simulated error (for the optimal stroke: the design's error term)")
     meaning = ([] if kinds <= {"optimal"} else ["the classic law meets the accuracy there and at every lower rate"]) + (
-        ["the optimal stroke is solved for that rate (a lower rate needs its own solve: the error rises and falls "
-         "with the rate)"] if "optimal" in kinds else [])
-    head += "\nmax spm: " + "; ".join(meaning)
+        ["the optimal stroke's design is for the confirmed rate (a lower rate needs its own solve: the error rises "
+         "and falls with the rate)"] if "optimal" in kinds else [])
+    head += "\nmax spm: the confirmed rate rounded down to the resolution; " + "; ".join(meaning)
     columns = [("accuracy_mm", "accuracy mm"), ("stroke", "stroke"), ("max_spm", "max spm"), ("binding", "binding limit"),
                ("confirmed_spm", "confirmed at spm"), ("handover_error_mm", "error there mm"),
                ("failed_spm", "rejected at spm"), ("failed_error_mm", "error at rejected mm")]
@@ -167,49 +173,58 @@ def plot_tradeoff(report: dict, path: str | Path | None = None):
     fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
     markers = {"handover_accuracy": "o", "torque_limit": "s", "peak_torque": "s", "overload": "s",
                "rms_torque": "D", "peak_speed": "^", "sampling": "v"}
-    for kind in dict.fromkeys(p["stroke"] for p in report["points"]):
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    kinds = list(dict.fromkeys(p["stroke"] for p in report["points"]))
+    bindings: dict = {}  # the marker of every binding limit drawn (the legend explains them)
+    for colour, kind in zip(colours, kinds):
         pts = [p for p in report["points"] if p["stroke"] == kind and p["max_spm"] is not None]
+        none = [p["accuracy_mm"] for p in report["points"] if p["stroke"] == kind and p["max_spm"] is None]
+        if pts:
+            ax.plot([p["accuracy_mm"] for p in pts], [p["max_spm"] for p in pts], lw=1.4, color=colour,
+                    label=_words(kind))
+        if none:  # accuracies without a rate: a cross at the bottom, a row per stroke, named in the legend
+            ax.plot(none, [0.03 + 0.045 * kinds.index(kind)] * len(none), "x", color=colour, ms=7, mew=1.6,
+                    transform=ax.get_xaxis_transform(),
+                    label=f"{_words(kind)}: no rate at {', '.join(f'{a:g}' for a in none)} mm (crosses at the bottom)")
         if not pts:
             continue
         x = [p["accuracy_mm"] for p in pts]
-        y = [p["max_spm"] for p in pts]
-        line, = ax.plot(x, y, lw=1.4, label=_words(kind))
         right = max(x)
         # the rate above each point that the full simulation rejected: a hollow marker joined to the point
         failed = [p for p in pts if p.get("failed_spm") is not None]
         for p in failed:
-            ax.plot([p["accuracy_mm"]] * 2, [p["max_spm"], p["failed_spm"]], lw=0.8, color=line.get_color(), alpha=0.6)
+            ax.plot([p["accuracy_mm"]] * 2, [p["max_spm"], p["failed_spm"]], lw=0.8, color=colour, alpha=0.6)
         if failed:
             ax.plot([p["accuracy_mm"] for p in failed], [p["failed_spm"] for p in failed], "v", mfc="none",
-                    color=line.get_color(), label=f"{_words(kind)}: the rate above, rejected by the simulation")
+                    color=colour, label=f"{_words(kind)}: the rate above, rejected by the simulation")
         said = None  # a label only where the rate or the binding limit changes (looser accuracies repeat them)
         for p in pts:
-            ax.plot(p["accuracy_mm"], p["max_spm"], markers.get(p["binding"], "x"), color=line.get_color())
+            marker = markers.get(p["binding"], "x")
+            bindings.setdefault(marker, []).append(_words(p["binding"]))
+            ax.plot(p["accuracy_mm"], p["max_spm"], marker, color=colour)
             if said == (p["max_spm"], p["binding"]):
                 continue
             above = said is not None and said[0] == p["max_spm"]  # beside a label at the same rate: above the line
             said = (p["max_spm"], p["binding"])
             last = p["accuracy_mm"] == right  # the rightmost label goes to the left of its point, inside the axes
-            error = "" if p.get("handover_error_mm") is None else f" ({p['handover_error_mm']:.3g} mm)"
+            error = "" if p.get("handover_error_mm") is None else f", error {p['handover_error_mm']:.3g} mm"
             reached = "" if "starts" not in p else f", {p['starts_at_best']} of {p['starts']} starts"
             ax.annotate(_words(p["binding"]) + error + reached, (p["accuracy_mm"], p["max_spm"]),
                         xytext=(-4 if last else 4, 5 if above else -10),
-                        textcoords="offset points", fontsize=7, color=line.get_color(), ha="right" if last else "left")
-    missing: dict = {}  # accuracies without a rate (per stroke): one line in the upper left corner
-    for p in report["points"]:
-        if p["max_spm"] is None:
-            missing.setdefault(_words(p["stroke"]), []).append(f"{p['accuracy_mm']:g}")
-    if missing:
-        ax.text(0.01, 0.98, "no rate: " + "; ".join(f"{k} at {', '.join(v)} mm" for k, v in missing.items()),
-                transform=ax.transAxes, va="top", fontsize=8, color="0.3")
+                        textcoords="offset points", fontsize=7, color=colour, ha="right" if last else "left")
+    for marker, names in bindings.items():  # what each marker's binding limit is (grey: any stroke)
+        ax.plot([], [], marker, color="0.45", label="binds: " + " / ".join(dict.fromkeys(names)))
     from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter
 
     ax.set_xscale("log")
-    # ticks at the requested accuracies, as plain decimals (0.05, 0.1, 0.2), not 6e-2 / 2e-1
-    ax.xaxis.set_major_locator(FixedLocator(sorted({p["accuracy_mm"] for p in report["points"]})))
+    # ticks at the requested accuracies, as plain decimals (0.05, 0.1, 0.2), not 6e-2 / 2e-1; every one in view,
+    # those without a rate too
+    asked = sorted({p["accuracy_mm"] for p in report["points"]})
+    ax.xaxis.set_major_locator(FixedLocator(asked))
     ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
     ax.xaxis.set_minor_formatter(NullFormatter())
-    ax.margins(x=0.06)
+    span = (asked[-1] / asked[0]) ** 0.06 if asked[-1] > asked[0] else 1.5
+    ax.set_xlim(asked[0] / span, asked[-1] * span)
     ax.set_xlabel("required handover accuracy [mm]")
     ax.set_ylabel("highest stitch rate [spm]")
     classic = any(p["stroke"] != "optimal" for p in report["points"])
@@ -218,7 +233,7 @@ def plot_tradeoff(report: dict, path: str | Path | None = None):
     ax.set_title(f"{report['problem']}: what accuracy costs in stitch rate"
                  + (f"\n({'; '.join(d for d in drive if d)})" if any(drive) else ""), fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(loc="best", fontsize=8)
+    fig.legend(loc="outside lower center", ncols=2, fontsize=8)  # below the axes: clear of every point and label
     if path is not None:
         from .figures import fit_titles
 

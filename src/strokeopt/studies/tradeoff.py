@@ -392,7 +392,10 @@ def _one_accuracy(problem, acc: float, resolution: float, lowest: float, spm0: f
         except SolverError as exc:
             say(tag, f"min_time with {100 * reserve:.1f} % torque reserve: no design ({exc.reason.splitlines()[0]})")
             break
-        warm, binding = d, "torque_limit"
+        # the reserve is the servo's torque command's; where the design's own bound is the accuracy, that binds too
+        warm = d
+        binding = "handover_accuracy" if binding_of(d.notes[0].split("bound by:", 1)[-1]) == "handover_accuracy" \
+            else "torque_limit"
         say(tag, f"min_time {d.spm:.1f} spm with {100 * reserve:.1f} % of the torque limit in reserve for the "
                  "loop; full simulation")
         top, hi = d.spm, confirm(problem, d, d.spm, acc)
@@ -456,6 +459,6 @@ def tradeoff(problem, accuracies=None, *, strokes: str = "both", resolution: flo
                                    starts=starts)
     return {"problem": problem.name, "motor": problem.drive.motor, "pulley_teeth": problem.pulley_teeth,
             "law": problem.default_law.label, "resolution_spm": resolution, "torque_basis": TORQUE_BASIS,
-            "starts": starts, **({"start_rates_spm": [round(r, 1) for r in start_rates(problem, problem.spm, starts)]}
+            "check_tolerance_pct": 100 * _fixed_drive(problem, 1.0).check_tolerance, "starts": starts, **({"start_rates_spm": [round(r, 1) for r in start_rates(problem, problem.spm, starts)]}
                                  if strokes != "classic" and starts > 1 else {}),
             "points": [p.as_dict() for p in points]}
