@@ -84,7 +84,7 @@ def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step
     at most the accuracy *at this rate and at every lower one* (so the curve
     is monotone by definition: the error need not rise strictly with speed).
     The binding limit is the one that fails just above the highest rate. ``progress(step, text)``:
-    called with a line per simulated rate of the grid.
+    called with a line per simulated rate (the grid's and the bisections').
     """
     from ..drive.sizing import max_spm as drive_max_spm
 
@@ -105,11 +105,14 @@ def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step
     sampling_max = problem.spm * move / max(settings.control_cycle, settings.position_sampling)
     cache: dict = {}
 
-    def evaluate(spm: float):
+    def evaluate(spm: float):  # a line per simulated rate, the grid's and the bisections'
         spm = round(spm, 6)
         if spm not in cache:
             res = handover_accuracy(problem, spm=spm, settings=settings, axis=axis, gains=gains)
             cache[spm] = (res.handover_error, res.torque_limited)
+            if progress:
+                progress(problem.default_law.name, f"{spm:.1f} spm: handover error {res.handover_error * 1e3:.4f} mm"
+                         + (" (torque command limited)" if res.torque_limited else ""))
         return cache[spm]
 
     top = min(drive_max, sampling_max * (1 - 1e-9))
@@ -119,9 +122,6 @@ def tradeoff_classic(problem, accuracies=None, *, resolution: float = 10.0, step
     for spm in grid:
         e, sat = evaluate(spm)
         errors.append((spm, e, sat))
-        if progress:
-            progress(problem.default_law.name, f"{spm:.0f} spm: handover error {e * 1e3:.4f} mm"
-                     + (" (torque command limited)" if sat else ""))
     points = []
     best = None
     for acc in accuracies:
