@@ -47,3 +47,12 @@ class LimitError(SolverError):
         super().__init__(reason, partial)
         self.excess = float(excess)
         self.short = short
+
+
+class AccuracyUnreachable(LimitError):
+    """The most accurate stroke a design finds (``min_handover_error``) still breaks the handover accuracy:
+    ``least_error`` [m] is its error (the design's exact term at its solution)."""
+
+    def __init__(self, reason: str, excess: float, short: str, least_error: float):
+        super().__init__(reason, excess, short)
+        self.least_error = float(least_error)

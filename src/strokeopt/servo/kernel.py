@@ -207,9 +207,9 @@ def held_rows(req) -> int:
 
 
 #: Rows of the term a solve with the accuracy held has: the instants (and table phases) of the window with the
-#: largest error at the solve's start stroke, where the term is exact. Every row is a dense pair of constraint rows over the moves'
-#: accelerations, and with all 100 the factorisation of IPOPT's linear system took two thirds of a solve with the
-#: accuracy held; at a solution that holds it, 3 to 7 rows are within 10 % of the largest error, 12 to 36 within
+#: largest error at the solve's start stroke, where the term is exact. Every row is a dense pair of constraint
+#: rows over the moves' accelerations, and with all 100 the factorisation of IPOPT's linear system took two
+#: thirds of a solve with the accuracy held; at a solution that holds it, 3 to 7 rows are within 10 % of the largest error, 12 to 36 within
 #: 30 %. A row left out is in the exact check of the solution (the term taken again with the solution as its
 #: start: its largest errors are its rows), and a solution that breaks the accuracy there is solved again from
 #: itself, as for the load forces' linearisation (:data:`LOAD_PASSES`).

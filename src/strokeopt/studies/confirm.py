@@ -8,7 +8,7 @@ import math
 from dataclasses import dataclass, replace
 
 from ..drive.checks import within_limit
-from ..errors import LimitError, SolverError
+from ..errors import AccuracyUnreachable, SolverError
 from ..servo.accuracy import handover_accuracy
 
 
@@ -171,13 +171,14 @@ def least_error(problem, settings, spm: float, acc: float) -> Trial:
     """What an accuracy without a rate misses by: the most accurate stroke at ``spm`` (:data:`SEARCH_OBJECTIVE`,
     the drive of ``settings``) and its full simulation. Where the design finds its least error above the accuracy
     (the usual case: it then has no design to simulate), the trial's result is None and its ``excess`` that error's
-    (the design's exact term at its solution: the simulation's error at the window's checked instants)."""
+    (the design's exact term at its solution: the simulation's error at the window's checked instants); where it
+    finds no design (another limit), the excess is inf and the reason says why."""
     from ..design.solve import solve_design
 
     try:
         design = solve_design(problem, objective=SEARCH_OBJECTIVE, spm=spm, settings=settings)
-    except LimitError as exc:
-        return Trial(spm, exc.excess, exc.reason)
+    except AccuracyUnreachable as exc:
+        return Trial(spm, exc.least_error / acc - 1.0, exc.reason)
     except SolverError as exc:
         return Trial(spm, math.inf, exc.reason)
     return confirm(problem, design, spm, acc)

@@ -286,7 +286,7 @@ def _no_rate(problem, point: TradeoffPoint, spm0: float, resolution: float, say,
         say(_tag(acc), f"{spm0:g} spm: no most accurate stroke ({t.reason.splitlines()[0]})")
         return point
     say(_tag(acc), f"{spm0:g} spm: the most accurate stroke reaches {error * 1e3:.4f} mm")
-    return replace(point, binding="handover_accuracy", failed_spm=spm0, failed_error=error,
+    return replace(point, binding=binding_of(t.reason), failed_spm=spm0, failed_error=error,
                    failed_reason=f"the most accurate stroke at {spm0:g} spm reaches {error * 1e3:.4f} mm",
                    detail=f"no rate: the most accurate stroke at {spm0:g} spm reaches {error * 1e3:.4f} mm ({point.detail})")
 
@@ -298,6 +298,11 @@ def _fixed_drive(problem, acc: float):
 
     base = problem.design or DesignSettings()
     return replace(base, accuracy=acc, motor_choice="fixed", pulley="fixed", rate_bracket=RATE_BRACKET)
+
+
+def _design_bound(design) -> str:
+    """The limit a ``min_time`` design names first as what bounds its rate."""
+    return binding_of(design.notes[0].split("bound by:", 1)[-1])
 
 
 def _quiet(step, text) -> None:
@@ -375,7 +380,7 @@ def _one_accuracy(problem, acc: float, resolution: float, lowest: float, spm0: f
         say(tag, f"min_time: no design ({exc.reason.splitlines()[0]})")
         return TradeoffPoint(acc, "optimal", None, binding_of(exc.reason), None, exc.reason), None, True
     warm = d
-    binding = binding_of(d.notes[0].split("bound by:", 1)[-1])
+    binding = _design_bound(d)
     say(tag, f"min_time {d.spm:.1f} spm ({binding}); full simulation")
     top, hi = d.spm, confirm(problem, d, d.spm, acc)
     if not hi.ok:
@@ -394,8 +399,7 @@ def _one_accuracy(problem, acc: float, resolution: float, lowest: float, spm0: f
             break
         # the reserve is the servo's torque command's; where the design's own bound is the accuracy, that binds too
         warm = d
-        binding = "handover_accuracy" if binding_of(d.notes[0].split("bound by:", 1)[-1]) == "handover_accuracy" \
-            else "torque_limit"
+        binding = "handover_accuracy" if _design_bound(d) == "handover_accuracy" else "torque_limit"
         say(tag, f"min_time {d.spm:.1f} spm with {100 * reserve:.1f} % of the torque limit in reserve for the "
                  "loop; full simulation")
         top, hi = d.spm, confirm(problem, d, d.spm, acc)
@@ -448,6 +452,8 @@ def tradeoff(problem, accuracies=None, *, strokes: str = "both", resolution: flo
     stitch rate with the problem's classic law and with the optimal stroke, and the binding limit.
     ``progress(step, text)``: called with a line at every step (a simulated rate, a design solve).
     ``runner``: where the optimal stroke's accuracies are solved (:func:`tradeoff_optimal`)."""
+    from ..design.transcription.settings import DesignSettings
+
     if strokes not in ("both", "classic", "optimal"):
         raise ProblemError("--strokes", "", f"{strokes!r} is not one of both, classic, optimal")
     points = []
@@ -459,6 +465,7 @@ def tradeoff(problem, accuracies=None, *, strokes: str = "both", resolution: flo
                                    starts=starts)
     return {"problem": problem.name, "motor": problem.drive.motor, "pulley_teeth": problem.pulley_teeth,
             "law": problem.default_law.label, "resolution_spm": resolution, "torque_basis": TORQUE_BASIS,
-            "check_tolerance_pct": 100 * _fixed_drive(problem, 1.0).check_tolerance, "starts": starts, **({"start_rates_spm": [round(r, 1) for r in start_rates(problem, problem.spm, starts)]}
-                                 if strokes != "classic" and starts > 1 else {}),
+            "check_tolerance_pct": 100 * (problem.design or DesignSettings()).check_tolerance, "starts": starts,
+            **({"start_rates_spm": [round(r, 1) for r in start_rates(problem, problem.spm, starts)]}
+               if strokes != "classic" and starts > 1 else {}),
             "points": [p.as_dict() for p in points]}

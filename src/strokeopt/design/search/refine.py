@@ -29,7 +29,7 @@ from ..transcription.objectives import TIME_SCALE, free_time, needs_terms
 from ..transcription.pins import pin_intervals, pin_times, pins_fit
 from ..transcription.request import SolveRequest
 from ..transcription.solver import STATUS_OK, solve_nlp
-from ...errors import LimitError, SolverError
+from ...errors import AccuracyUnreachable, SolverError
 
 #: Re-solves that move the pinned points at most, per mesh.
 PIN_ITERATIONS = 5
@@ -218,14 +218,14 @@ class _Pinned:
     iterations: int
 
 
-def _accuracy_unreachable(req: SolveRequest, nlp: Nlp, error: float) -> LimitError:
+def _accuracy_unreachable(req: SolveRequest, nlp: Nlp, error: float) -> AccuracyUnreachable:
     """The error of a most accurate stroke (``min_handover_error``) whose error still breaks the accuracy."""
     settings, choice = req.settings, req.choice
     motor = f" for motor {choice.motor.name}" if choice is not None and choice.motor is not None else ""
     short = (f"handover accuracy needs {error * 1e3:.4g} mm (the most accurate stroke), limit "
              f"{settings.accuracy * 1e3:.4g} mm ({100 * (error / settings.accuracy - 1):.1f} % over)")
-    return LimitError(f"the design cannot meet the limits{motor} at {nlp.request.spm:g} spm: {short}",
-                      error / settings.accuracy - 1, short)
+    return AccuracyUnreachable(f"the design cannot meet the limits{motor} at {nlp.request.spm:g} spm: {short}",
+                               error / settings.accuracy - 1, short, error)
 
 
 def solve_pinned(req: SolveRequest, mesh, warm) -> _Pinned:
