@@ -64,7 +64,9 @@ from .studies.sweeps import impact_study
 from .studies.runner import StudyRunner
 from .motion.stroke import Kinematics, Piece, StrokeFunction
 from .motion.timing import Interval, TimingDiagram
-from .drive.transmission import BeltPulley, ScrewLever, SliderCrank, Transmission, gt3_pitch_diameter
+from .drive.crank_slider import CrankSlider
+from .drive.transmission import BeltPulley, Gearbox, ScrewLever, Transmission, gt3_pitch_diameter
+from .drive.transmissions import TRANSMISSIONS
 
 __all__ = [
     "Body", "Element", "ForceLaw", "Model", "Scene", "SceneResult", "SimulationOptions", "make_scene",
@@ -73,7 +75,7 @@ __all__ = [
     "ProblemError", "SolverError", "StrokeFunction", "StrokeoptError", "TimingDiagram", "Transmission",
     "gt3_pitch_diameter", "law_table", "load_problem", "make_law",
     "Belt", "Catalogue", "Check", "DriveLimits", "DriveSpec", "Load", "LoadForce", "Pulley", "ScrewLever", "ServoMotor",
-    "SliderCrank", "drive_checks", "load_catalogue", "load_torque", "optimal_radius", "size_drive",
+    "CrankSlider", "Gearbox", "TRANSMISSIONS", "drive_checks", "load_catalogue", "load_torque", "optimal_radius", "size_drive",
     "OBJECTIVES", "Design", "DesignSettings", "Mesh", "compare_with_laws", "design_text", "mesh_study", "read_design",
     "solve_design", "sweep_design",
     "AccuracyResult", "DriveAxis", "ServoErrorTerm", "ServoSettings", "accuracy_report", "axis_from_problem", "handover_accuracy",

@@ -22,7 +22,8 @@ from .design.transcription.contact_setup import check_contact
 from .design.transcription.free import check_free
 from .design.transcription.settings import parse_design
 from .drive.spec import parse_drive
-from .drive.transmission import PROFILE_PITCH, TEETH_RANGE, BeltPulley, Gearbox, ScrewLever, Transmission
+from .drive.transmission import Transmission
+from .drive.transmissions import TRANSMISSIONS
 from .errors import ProblemError
 from .io.cycle import CYCLE_NOUN, STITCH, MachineCycle
 from .io.fields import _REQUIRED, Fields, apply_overrides
@@ -296,68 +297,19 @@ def _timing_unit(f: Fields, rows: list[Fields]) -> str:
     return found.pop() if found else "m"
 
 
-#: Lead angle plus the flanks' friction angle of a screw the motor turns [deg]: at 90 deg the torque
-#: F d2/2 tan(lambda + rho') has no finite value (beyond it, it changes sign): no drive moves the nut.
-SCREW_ANGLE_MAX_DEG = 90.0
-
-
-def _optional_mm(f: Fields, key: str, lo: float, hi: float) -> float | None:
-    value = f.number(key, None, min=lo, max=hi)
-    return None if value is None else value * 1e-3
-
-
 def _read_transmission(trans: Fields, timing: TimingDiagram) -> Transmission:
-    """``[transmission]``: a toothed belt pulley (``pulley_teeth``), or a screw and lever (``lead_mm``,
-    ``lever_arm_mm`` R0, ``sleeve_arm_mm`` R0P, ``lever_offset_deg``, ``screw_inertia_kg_cm2``)."""
-    kind = trans.string("type", "belt_pulley", choices=("belt_pulley", "screw_lever", "gearbox"))
-    if (kind == "gearbox") != timing.rotary:
-        raise trans.error("type", f"{kind!r} drives a {'rotary' if kind == 'gearbox' else 'linear'} load, but "
-                                  f"[timing] states its positions in {unit_key(timing.unit)}: a gearbox takes "
-                                  "positions and strokes in deg (start_position_deg, stroke_deg), a belt pulley or "
-                                  "a screw and lever in mm")
-    if kind == "gearbox":
-        # motor turns per output turn: 1 (a direct drive) to 1000 (a two-stage worm); a gearbox's own inertia on
-        # the motor shaft as a rotor's (catalogue.py: to 1e6 kg cm^2). The ratio is the problem's design choice:
-        # a design uses it as stated (a study compares ratios by --set transmission.ratio=...)
-        gear = Gearbox(trans.number("ratio", min=1.0, max=1000.0),
-                       trans.number("inertia_kg_cm2", 0.0, min=0.0, max=1e6) * 1e-4,
-                       trans.string("gearbox", None))
-        trans.finish()
-        return gear
-    if kind == "belt_pulley":
-        profile = trans.string("profile", "GT3", choices=tuple(PROFILE_PITCH))
-        teeth = trans.number("pulley_teeth", integer=True, min=TEETH_RANGE[0], max=TEETH_RANGE[1])
-        trans.finish()
-        return BeltPulley.toothed(teeth, profile)
-    # leads of 0.1 mm (a fine adjusting screw) to 100 mm (a steep ball screw); lever arms of 1 mm to 1 m;
-    # the arms' offset within the lever's own range (transmission.LEVER_LIMIT_DEG); a screw of up to
-    # 1e4 kg cm^2 (a 100 mm steel shaft a metre long is 8e3 kg cm^2)
-    tr = ScrewLever(trans.number("lead_mm", min=0.1, max=100.0) * 1e-3,
-                    trans.number("lever_arm_mm", min=1.0, max=1e3) * 1e-3,
-                    trans.number("sleeve_arm_mm", min=1.0, max=1e3) * 1e-3,
-                    math.radians(trans.number("lever_offset_deg", 0.0, min=-80.0, max=80.0)),
-                    trans.number("screw_inertia_kg_cm2", 0.0, min=0.0, max=1e4) * 1e-4,
-                    # the screw torque from the nut force (contact/chain.py): pitch diameters 1-100 mm, flank
-                    # friction 0.01 (ball screw) to 1, flank angles 0 (square) to 90 deg (metric 60, Tr 30)
-                    _optional_mm(trans, "screw_diameter_mm", 1.0, 100.0),
-                    trans.number("thread_friction", 0.15, min=0.01, max=1.0),
-                    math.radians(trans.number("thread_angle_deg", 30.0, min=0.0, max=90.0)))
-    if tr.screw_diameter is not None:  # a screw the motor cannot drive: F d2/2 tan(lambda + rho') turns over
-        lam = math.degrees(math.atan(tr.lead / (math.pi * tr.screw_diameter)))
-        rho = math.degrees(math.atan(tr.thread_friction / math.cos(tr.thread_angle / 2)))
-        if lam + rho >= SCREW_ANGLE_MAX_DEG:
-            raise trans.error("lead_mm", f"{tr.lead * 1e3:g} mm on a {tr.screw_diameter * 1e3:g} mm screw is a lead "
-                                         f"angle of {lam:.1f} deg; with the flanks' friction angle {rho:.1f} deg "
-                                         f"(thread_friction {tr.thread_friction:g}) they add to {lam + rho:.1f} deg, at "
-                                         f"or above {SCREW_ANGLE_MAX_DEG:g} deg: no torque drives the nut (a shorter "
-                                         "lead, a larger diameter or less friction)")
-    positions = [p for i in timing.intervals for p in (i.start_position, i.end_position)]
-    why = tr.range_error(min(positions), max(positions))
-    if why is not None:
-        raise trans.error("sleeve_arm_mm", f"the strokes of [timing] reach beyond the lever's range: {why}; "
-                                           "a longer arm or a shorter stroke")
-    trans.finish()
-    return tr
+    """``[transmission]``: its ``type`` (drive/transmissions.py: a belt pulley by default) reads the rest; the
+    load it drives must be the one ``[timing]`` states (mm for a translating load, deg for a rotary one)."""
+    kind = trans.string("type", next(iter(TRANSMISSIONS)), choices=tuple(TRANSMISSIONS))
+    cls = TRANSMISSIONS[kind]
+    if cls.load_unit != timing.unit:
+        others = sorted(name for name, c in TRANSMISSIONS.items() if c.load_unit == timing.unit)
+        raise trans.error("type", f"{kind!r} drives a {'rotary' if cls.load_unit == 'rad' else 'linear'} load, but "
+                                  f"[timing] states its positions in {unit_key(timing.unit)}: a {cls.label} takes "
+                                  f"positions and strokes in {unit_key(cls.load_unit)} (start_position_"
+                                  f"{unit_key(cls.load_unit)}, stroke_{unit_key(cls.load_unit)}); for positions in "
+                                  f"{unit_key(timing.unit)}: {', '.join(others)}")
+    return cls.read(trans, timing)
 
 
 def _model_reference(model, timing: TimingDiagram) -> tuple[float, float] | None:

@@ -8,7 +8,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from strokeopt import Check, DriveLimits, Load, LoadForce, ProblemError, SliderCrank, load_problem, load_torque
+from strokeopt import Check, DriveLimits, Load, LoadForce, ProblemError, CrankSlider, load_problem, load_torque
 from strokeopt.drive.catalogue import load_catalogue
 from strokeopt.drive.checks import BeltSpec, belt_load, binding_check, drive_checks
 from strokeopt.drive.sizing import max_spm, optimal_radius, scale_kinematics, size_drive
@@ -110,7 +110,7 @@ def test_spring_and_gravity_terms(reference, cat):
 def test_power_balance_through_a_crank():
     # no special case for position-dependent transmissions: with inertia only,
     # motor power = d/dt kinetic energy = J omega eps + m v a
-    tr = SliderCrank(0.01, 0.04, inertia=2e-5)
+    tr = CrankSlider(0.01, 0.04, inertia=2e-5)
     load = Load(0.3)
     t = np.linspace(0.0, 0.1, 201)
     phi = 0.3 + 2.0 * t / 0.1 + 0.2 * np.sin(30 * t)

@@ -8,7 +8,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from strokeopt import BeltPulley, ScrewLever, SliderCrank, gt3_pitch_diameter
+from strokeopt import BeltPulley, ScrewLever, CrankSlider, gt3_pitch_diameter
 from strokeopt.drive.transmission import Transmission
 
 PHI = np.linspace(0.1, 2.9, 15)
@@ -55,7 +55,7 @@ def test_belt_rejects_bad_sizes():
         BeltPulley(0.02, inertia=-1.0)
 
 
-@pytest.mark.parametrize("tr", [SliderCrank(0.01, 0.04), ScrewLever(2e-3, 15e-3, 25e-3, offset=0.2)],
+@pytest.mark.parametrize("tr", [CrankSlider(0.01, 0.04), ScrewLever(2e-3, 15e-3, 25e-3, offset=0.2)],
                          ids=["crank", "screw_lever"])
 def test_inverse_and_transfer_functions(tr):
     x, mu, nu = tr.transfer(PHI)
@@ -67,7 +67,7 @@ def test_inverse_and_transfer_functions(tr):
     assert nu == pytest.approx((xp - 2 * x + xm) / h**2, rel=1e-4, abs=1e-7)
 
 
-@pytest.mark.parametrize("tr", [BeltPulley(0.03), SliderCrank(0.01, 0.04), ScrewLever(2e-3, 15e-3, 25e-3, 0.2)],
+@pytest.mark.parametrize("tr", [BeltPulley(0.03), CrankSlider(0.01, 0.04), ScrewLever(2e-3, 15e-3, 25e-3, 0.2)],
                          ids=["belt", "crank", "screw_lever"])
 def test_motor_kinematics_inverts_the_load_motion(tr):
     # a motor motion phi(t) -> load motion by the chain rule -> back to the motor motion

@@ -104,3 +104,31 @@ def test_load_force_contact_errors(reference_path, sets, field, words):
     with pytest.raises(ProblemError) as err:
         load_problem(reference_path, sets)
     assert err.value.field.endswith(field) and words in err.value.message
+
+
+def test_omit_drops_tables_and_keys_of_the_base(tmp_path):
+    # a variant with another transmission states its [transmission] whole, without the base's belt keys
+    _copy(tmp_path)
+    base = load_problem(tmp_path / "base.toml")
+    assert base.design is not None and "design" in base.data
+    (tmp_path / "v.toml").write_text('extends = "base.toml"\nomit = ["design", "motion.law"]\n'
+                                     '[motion]\nlaw = "sine"\n', encoding="utf-8")
+    v = load_problem(tmp_path / "v.toml")
+    assert v.design is None and "design" not in v.data and v.default_law.name == "sine"
+    assert [(i.span_deg, i.stroke) for i in v.timing.intervals] == [(i.span_deg, i.stroke) for i in base.timing.intervals]
+
+
+@pytest.mark.parametrize("text, words", [
+    ('omit = ["design"]\n', "it needs extends"),
+    ('extends = "base.toml"\nomit = ["servo"]\n', "'servo' is not a table or key of the base 'base.toml'"),
+    ('extends = "base.toml"\nomit = ["design.nothing"]\n', "'design.nothing' is not a table or key"),
+    ('extends = "base.toml"\nomit = "design"\n', "must be an array of dotted keys"),
+    ('extends = "base.toml"\nomit = [""]\n', "must be an array of dotted keys"),
+])
+def test_bad_omit_names_the_field(tmp_path, text, words):
+    _copy(tmp_path)
+    (tmp_path / "v.toml").write_text(text, encoding="utf-8")
+    with pytest.raises(ProblemError) as err:
+        load_problem(tmp_path / "v.toml")
+    assert err.value.field == "omit" and words in err.value.message
+    assert main(["kinematics", str(tmp_path / "v.toml"), "--plot", "none"]) == 2

@@ -32,7 +32,20 @@ class Transmission:
     """
 
     name = "transmission"
+    #: the transmission in words, for reports ("belt pulley")
+    label = "transmission"
+    #: the SI unit of the load it drives: "m" (a translating load, [timing] in mm) or "rad" (a rotary load,
+    #: [timing] in deg)
+    load_unit = "m"
     inertia = 0.0
+
+    @classmethod
+    def read(cls, fields, timing) -> "Transmission":
+        """The transmission of a problem file's ``[transmission]`` table (``fields``: its
+        :class:`~strokeopt.io.fields.Fields`, ``type`` already read; ``timing``: the problem's
+        :class:`~strokeopt.motion.timing.TimingDiagram`), every field read with its range and the table
+        finished (unknown keys refused). Each registered type (transmissions.py) defines it."""
+        raise NotImplementedError(f"{cls.__name__} cannot be read from a problem file")
 
     def position(self, phi):
         raise NotImplementedError
@@ -191,6 +204,15 @@ class BeltPulley(Transmission):
     """
 
     name = "belt_pulley"
+    label = "belt pulley"
+
+    @classmethod
+    def read(cls, fields, timing) -> "BeltPulley":
+        """``[transmission]`` of a belt drive: the toothed pulley's ``profile`` and ``pulley_teeth``."""
+        profile = fields.string("profile", "GT3", choices=tuple(PROFILE_PITCH))
+        teeth = fields.number("pulley_teeth", integer=True, min=TEETH_RANGE[0], max=TEETH_RANGE[1])
+        fields.finish()
+        return cls.toothed(teeth, profile)
 
     @classmethod
     def toothed(cls, teeth: int, profile: str = "GT3", inertia=0.0) -> "BeltPulley":
@@ -240,29 +262,6 @@ class BeltPulley(Transmission):
         return f"BeltPulley(pitch_diameter={self.pitch_diameter * 1e3:.3f} mm)"
 
 
-class SliderCrank(Transmission):
-    """A crank of radius ``r`` and connecting rod ``l`` driving a slider.
-
-    ``x`` is the slider's travel from the dead centre (phi = 0), towards the
-    crank shaft: ``x = r + l - r cos(phi) - sqrt(l^2 - r^2 sin^2(phi))``.
-    The inverse uses the half turn 0 <= phi <= pi.
-    """
-
-    name = "slider_crank"
-
-    def __init__(self, crank_radius: float, rod_length: float, inertia: float = 0.0):
-        if not (crank_radius > 0 and rod_length > crank_radius):
-            raise ValueError("need 0 < crank radius < rod length")
-        self.r, self.l, self.inertia = float(crank_radius), float(rod_length), float(inertia)
-
-    def position(self, phi):
-        return self.r + self.l - self.r * ca.cos(phi) - ca.sqrt(self.l**2 - (self.r * ca.sin(phi)) ** 2)
-
-    def inverse_position(self, x):
-        d = self.r + self.l - x
-        return ca.acos((d**2 + self.r**2 - self.l**2) / (2 * d * self.r))
-
-
 class ScrewLever(Transmission):
     """Screw and lever of the knitting-machine stitch-cam drive (sources B).
 
@@ -276,6 +275,40 @@ class ScrewLever(Transmission):
     """
 
     name = "screw_lever"
+    label = "screw and lever"
+
+    @classmethod
+    def read(cls, trans, timing) -> "ScrewLever":
+        """``[transmission]`` of a screw and lever: ``lead_mm``, ``lever_arm_mm`` R0, ``sleeve_arm_mm`` R0P,
+        ``lever_offset_deg``, ``screw_inertia_kg_cm2`` and the thread (``screw_diameter_mm``,
+        ``thread_friction``, ``thread_angle_deg``); the strokes of ``timing`` must stay within the lever's
+        range."""
+        # leads of 0.1 mm (a fine adjusting screw) to 100 mm (a steep ball screw); lever arms of 1 mm to 1 m;
+        # the arms' offset within the lever's own range (LEVER_LIMIT_DEG); a screw of up to 1e4 kg cm^2 (a
+        # 100 mm steel shaft a metre long is 8e3 kg cm^2)
+        diameter = trans.number("screw_diameter_mm", None, min=1.0, max=100.0)
+        tr = cls(trans.number("lead_mm", min=0.1, max=100.0) * 1e-3,
+                 trans.number("lever_arm_mm", min=1.0, max=1e3) * 1e-3,
+                 trans.number("sleeve_arm_mm", min=1.0, max=1e3) * 1e-3,
+                 math.radians(trans.number("lever_offset_deg", 0.0, min=-80.0, max=80.0)),
+                 trans.number("screw_inertia_kg_cm2", 0.0, min=0.0, max=1e4) * 1e-4,
+                 # the screw torque from the nut force (contact/chain.py): pitch diameters 1-100 mm, flank
+                 # friction 0.01 (ball screw) to 1, flank angles 0 (square) to 90 deg (metric 60, Tr 30)
+                 None if diameter is None else diameter * 1e-3,
+                 trans.number("thread_friction", 0.15, min=0.01, max=1.0),
+                 math.radians(trans.number("thread_angle_deg", 30.0, min=0.0, max=90.0)))
+        if tr.screw_diameter is not None:  # a screw the motor cannot drive: F d2/2 tan(lambda + rho') turns over
+            lam = math.degrees(math.atan(tr.lead / (math.pi * tr.screw_diameter)))
+            rho = math.degrees(math.atan(tr.thread_friction / math.cos(tr.thread_angle / 2)))
+            if lam + rho >= SCREW_ANGLE_MAX_DEG:
+                raise trans.error("lead_mm", f"{tr.lead * 1e3:g} mm on a {tr.screw_diameter * 1e3:g} mm screw is a "
+                                             f"lead angle of {lam:.1f} deg; with the flanks' friction angle {rho:.1f} "
+                                             f"deg (thread_friction {tr.thread_friction:g}) they add to "
+                                             f"{lam + rho:.1f} deg, at or above {SCREW_ANGLE_MAX_DEG:g} deg: no torque "
+                                             "drives the nut (a shorter lead, a larger diameter or less friction)")
+        check_reach(tr, trans, "sleeve_arm_mm", timing, "a longer arm or a shorter stroke")
+        trans.finish()
+        return tr
 
     def __init__(self, lead: float, R0: float, R0P: float, offset: float = 0.0, inertia: float = 0.0,
                  screw_diameter: float | None = None, thread_friction: float = 0.15, thread_angle: float = math.radians(30)):
@@ -335,6 +368,19 @@ class Gearbox(Transmission):
     like every transmission's; the load positions of such a problem are angles ([timing] in deg)."""
 
     name = "gearbox"
+    label = "gearbox"
+    load_unit = "rad"
+
+    @classmethod
+    def read(cls, trans, timing) -> "Gearbox":
+        """``[transmission]`` of a gearbox: ``ratio``, ``inertia_kg_cm2`` and the ``gearbox``'s name (a label)."""
+        # motor turns per output turn: 1 (a direct drive) to 1000 (a two-stage worm); a gearbox's own inertia on
+        # the motor shaft as a rotor's (catalogue.py: to 1e6 kg cm^2). The ratio is the problem's design choice:
+        # a design uses it as stated (a study compares ratios by --set transmission.ratio=...)
+        gear = cls(trans.number("ratio", min=1.0, max=1000.0), trans.number("inertia_kg_cm2", 0.0, min=0.0, max=1e6) * 1e-4,
+                   trans.string("gearbox", None))
+        trans.finish()
+        return gear
 
     def __init__(self, ratio: float, inertia: float = 0.0, label: str | None = None):
         if not (ratio > 0 and math.isfinite(ratio)):
@@ -354,6 +400,20 @@ class Gearbox(Transmission):
 
     def __repr__(self) -> str:
         return f"Gearbox(ratio={self.ratio:g}, inertia={self.inertia:g} kg m^2)"
+
+
+#: Lead angle plus the flanks' friction angle of a screw the motor turns [deg]: at 90 deg the torque
+#: F d2/2 tan(lambda + rho') has no finite value (beyond it, it changes sign): no drive moves the nut.
+SCREW_ANGLE_MAX_DEG = 90.0
+
+
+def check_reach(tr: Transmission, fields, key: str, timing, remedy: str) -> None:
+    """Refuse (naming ``key`` of ``fields``) a transmission ``tr`` whose range the positions of ``timing``
+    leave (:meth:`Transmission.range_error`); ``remedy`` says what to change."""
+    positions = [p for i in timing.intervals for p in (i.start_position, i.end_position)]
+    why = tr.range_error(min(positions), max(positions))
+    if why is not None:
+        raise fields.error(key, f"the strokes of [timing] reach beyond the {tr.label}'s range: {why}; {remedy}")
 
 
 #: The lever angle a screw-lever transmission may reach [deg] (both arms): tan() of the sleeve arm

@@ -4,12 +4,16 @@
 ``extends = "base.toml"`` (a path relative to the file) makes a problem file a variant of another: the base
 is read first (itself possibly extending a third), then the file's own tables are merged into it key by key
 (a table merges with the base's table, any other value, an array of tables included, replaces the base's).
-A cycle of ``extends`` is refused naming the chain. Relative paths inside a base (a catalogue file) are read
+A cycle of ``extends`` is refused naming the chain. ``omit = ["servo", "transmission", "design.pulley"]`` beside
+``extends`` drops those tables or keys of the base before the merge (a variant with another transmission
+states its own ``[transmission]`` whole; one without a servo model drops ``[servo]``); a name the base does not
+have is refused. Relative paths inside a base (a catalogue file) are read
 from the directory of the file being loaded.
 """
 
 from __future__ import annotations
 
+import copy
 import tomllib
 from dataclasses import replace
 from pathlib import Path
@@ -49,7 +53,10 @@ def read_problem_data(path: Path, chain: tuple[Path, ...] = ()) -> dict:
     file = str(path)
     data = _read_toml(path, chain)
     base = data.pop("extends", None)
+    omit = data.pop("omit", None)
     if base is None:
+        if omit is not None:
+            raise ProblemError(file, "omit", "drops tables or keys of a base: it needs extends")
         return data
     if not isinstance(base, str) or not base.strip():
         raise ProblemError(file, "extends", f"must be the name of a problem file (a string), got {base!r}")
@@ -63,7 +70,26 @@ def read_problem_data(path: Path, chain: tuple[Path, ...] = ()) -> dict:
         raise ProblemError(file, "extends", f"a chain of more than {EXTENDS_DEPTH_MAX} extends")
     if not base_path.exists():
         raise ProblemError(file, "extends", f"{base!r}: no such file (looked for {base_path})")
-    return merge_tables(read_problem_data(base_path, seen), data)
+    return merge_tables(_omitted(read_problem_data(base_path, seen), omit, file, base), data)
+
+
+def _omitted(base: dict, omit, file: str, base_name: str) -> dict:
+    """``base`` without the dotted keys of ``omit`` (``"servo"``, ``"design.pulley"``); None: all of it."""
+    if omit is None:
+        return base
+    if not (isinstance(omit, list) and all(isinstance(k, str) and k.strip() for k in omit)):
+        raise ProblemError(file, "omit", f"must be an array of dotted keys of the base (\"servo\", "
+                                         f"\"design.pulley\"), got {omit!r}")
+    out = copy.deepcopy(base)
+    for dotted in omit:
+        *parents, last = dotted.split(".")
+        table = out
+        for key in parents:
+            table = table.get(key) if isinstance(table, dict) else None
+        if not isinstance(table, dict) or last not in table:
+            raise ProblemError(file, "omit", f"{dotted!r} is not a table or key of the base {base_name!r}")
+        del table[last]
+    return out
 
 
 def merge_tables(base: dict, own: dict) -> dict:

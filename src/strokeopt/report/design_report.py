@@ -142,16 +142,30 @@ def _position_scale(problem) -> tuple[float, str]:
     return (180 / math.pi, "deg") if is_rotary(problem) else (1e3, "mm")
 
 
-def motor_scale(problem, design) -> tuple[float, str]:
+def motor_scale(problem, design) -> tuple[float | None, str]:
     """The motor's coordinate per unit of the output's [rad/m] and how it was found: the pulley radius, or a
     transmission's ratio at the output's zero (a screw and lever's changes by less than 0.1 % over a
-    stitch-cam step)."""
+    stitch-cam step). None where the ratio changes by more than :data:`RATIO_SPREAD_MAX` over the stroke's
+    positions (a crank near its dead centres): the motor's motion is then no scale of the output's."""
     if design.radius:
         return 1.0 / design.radius, f"output over the pulley radius {design.radius * 1e3:.3f} mm"
-    mu = float(np.ravel(problem.transmission.transfer(np.zeros(1))[1])[0])
+    tr, label = problem.transmission, machine_of(problem).transmission
+    positions = np.array(sorted({p for i in problem.timing.intervals for p in (i.start_position, i.end_position)}))
+    mus = np.abs(np.ravel(tr.transfer(np.ravel(tr.motor_angle(positions)))[1]))
+    if mus.max() > (1 + RATIO_SPREAD_MAX) * mus.min():
+        scale, unit = _position_scale(problem)
+        return None, (f"the {label}'s ratio runs from {mus.min() * scale:.4g} to {mus.max() * scale:.4g} "
+                      f"{unit}/rad over the stroke: the motor's motion is no scale of the output's, its speed and "
+                      "torque are in the drive's figure")
+    mu = float(np.ravel(tr.transfer(np.zeros(1))[1])[0])
     if is_rotary(problem):  # a gearbox: the load's angle is the motor's over the ratio
-        return 1.0 / mu, f"the load's angle times the {machine_of(problem).transmission}'s ratio {1 / mu:g}"
-    return 1.0 / mu, f"output over the {machine_of(problem).transmission}'s ratio at 0 mm ({mu * 1e3:.4g} mm/rad)"
+        return 1.0 / mu, f"the load's angle times the {label}'s ratio {1 / mu:g}"
+    return 1.0 / mu, f"output over the {label}'s ratio at 0 mm ({mu * 1e3:.4g} mm/rad)"
+
+
+#: The spread of a transmission's ratio over the stroke below which the report draws the motor's motion as a
+#: scale of the output's (a screw and lever over a stitch-cam step: under 0.1 %).
+RATIO_SPREAD_MAX = 1e-3
 
 
 def plot_stroke(problem, design, law_stroke):
@@ -165,6 +179,8 @@ def plot_stroke(problem, design, law_stroke):
     fig, axes = plt.subplots(4, 1, sharex=True, figsize=(PRINT_WIDTH_IN, 7.8), constrained_layout=True)
     draw_kinematics(list(axes), problem, [design.stroke, law_stroke], design.spm, n=1441)
     per_m, _ = motor_scale(problem, design)
+    if per_m is None:  # a varying ratio: no motor axes (the caption says why)
+        return fig
     jerk_scale = 1e-3 if "[km" in axes[3].get_ylabel() else 1.0
     position = per_m if is_rotary(problem) else 1e-3 * per_m * 180 / math.pi   # the left axis in deg or mm
     for ax, (label, f) in zip(axes, [("motor angle [deg]", position),
@@ -298,13 +314,13 @@ def section_stroke(d: ReportData) -> str:
               *(h.cell(mv[k], f"moves[{i}].{k}") for k in keys[1:]), h.cell(mv["C_a"], f"moves[{i}].C_a")]
              for i, mv in enumerate(s["moves"])]
     law = d.problem.stroke(s["spm"])
-    _, how = motor_scale(d.problem, d.design)
+    scale, how = motor_scale(d.problem, d.design)
     a_opt = max(mv[keys[2]] for mv in s["moves"])
     a_law = float(np.max(np.abs(law.sample(1441).a)))
     acc = "rad/s\u00b2" if rotary else "m/s\u00b2"
     caption = (f"The optimal stroke of the {m.output} against the problem's law ({law.label}) over the whole cam "
                f"cycle: peak |acceleration| {a_opt:.4g} {acc} against the law's {a_law:.4g} {acc}. Left axes: the "
-               f"{m.output}; right axes: the motor ({how}).")
+               f"{m.output}; " + (f"right axes: the motor ({how})." if scale is not None else f"no motor axes: {how}."))
     head = ["move", "stroke mm", "direction", "move time ms", "v_max m/s", "a_max m/s2", "jerk_max m/s3", "C_a"]
     out = h.heading("Moves") + h.table([load_label(x, rotary) for x in head], moves)
     out += h.svg_figure(plot_stroke(d.problem, d.design, law), caption)

@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from ..drive.transmissions import transmission_label
 from ..io.cycle import STITCH, cycle_of
 from ..io.plain import format_value, to_json  # noqa: F401  (report's names for them)
 
@@ -62,9 +63,8 @@ def format_table(rows: list[dict], columns: list[tuple[str, str]], title: str = 
 def drive_text(drive: dict) -> str:
     """The line every report has: which motor and pulley it used and where they come from."""
     teeth = drive.get("pulley_teeth")
-    names = {"screw_lever": "screw and lever", "belt_pulley": "belt pulley", "gearbox": "gearbox"}  # in words
     pulley = f"pulley {teeth} teeth" if teeth is not None else \
-        names.get(drive.get("transmission"), drive.get("transmission")) or "continuous pulley radius"
+        transmission_label(drive.get("transmission")) or "continuous pulley radius"
     return f"drive: motor {drive.get('motor') or '(none)'}, {pulley} (from {drive['from']})"
 
 

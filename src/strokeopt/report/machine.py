@@ -44,9 +44,6 @@ class Machine:
         return f"{self.motor} ({kind})" if self.motor else "no motor"
 
 
-_TRANSMISSIONS = {"belt_pulley": "belt pulley", "screw_lever": "screw and lever", "gearbox": "gearbox"}
-
-
 def _output(problem) -> str:
     """What the stroke moves: on a staged model, the free body of the transmission's last member that nothing
     carries ('cam' on a screw and lever); else the bar of a belt-driven axis."""
@@ -82,7 +79,7 @@ def machine_of(problem, design=None) -> Machine:
     motor = getattr(design, "motor", None) if design is not None else None
     spec = getattr(design, "motor_spec", None) if design is not None else None
     stepper = getattr(spec, "kind", "servo") == "stepper"
-    return Machine(output=_output(problem), transmission=_TRANSMISSIONS.get(tr.name, tr.name.replace("_", " ")),
+    return Machine(output=_output(problem), transmission=tr.label,
                    pulley=hasattr(tr, "radius"), motor=motor, stepper=stepper,
                    handover=problem.timing.handover_move is not None,
                    servo_model=getattr(problem, "servo", None) is not None and spec is not None,
