@@ -144,11 +144,11 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
                 raise ProblemError(file, f"drive.members[{k + 1}].stage", f"{member.stage!r} is no stage of the "
                                                                          f"{transmission.name}: {', '.join(stages)}")
     design_table = top.table("design", required=False)
-    design = parse_design(design_table) if design_table is not None else None
+    design = parse_design(design_table, rotary=timing.rotary) if design_table is not None else None
     check_contact(design.contact if design is not None else None, model, scenes, file)
     check_free(design.free if design is not None else (), model, drive, file)
     servo_table = top.table("servo", required=False)
-    servo = parse_servo(servo_table, timing, spm) if servo_table is not None else None
+    servo = parse_servo(servo_table, timing, spm, transmission) if servo_table is not None else None
     top.finish()
     return Problem(
         file=path or Path(file),

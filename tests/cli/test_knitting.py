@@ -309,9 +309,10 @@ def test_bench_registers_the_elastic_step():
 
 def test_commands_without_the_screw_lever_or_stepper_say_so(capsys):
     # `solve` designs through the screw and lever (tests/design/test_knitting_design.py); the servo accuracy models a
-    # belt drive's loop: the screw and lever is refused first, in one line naming the transmission
+    # servo motor's loop (a stepper has none) through a constant ratio: the stepper is refused in one line naming the
+    # motor field
     err = _error(capsys, ["accuracy", str(KNITTING)])
-    assert "transmission.type" in err and "screw_lever" in err and "belt_pulley" in err
+    assert "drive.motor" in err and "'HY200-1713' is a stepper motor" in err and "takes a servo motor" in err
 
 
 def test_max_spm_is_the_shortest_step_the_stepper_makes(knitting):

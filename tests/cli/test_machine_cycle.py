@@ -69,11 +69,11 @@ def test_loom_solve_text_and_report_speak_of_picks_and_the_gearbox(capsys, tmp_p
     _assert_loom_words(html)
 
 
-@pytest.mark.parametrize("command", ["accuracy", "tradeoff"])
-def test_servo_loop_commands_refuse_a_drive_without_a_belt(capsys, command):
-    """The servo loop these commands model is a belt drive's: the loom's gearbox is refused in one line naming
-    transmission.type (it was 'no GT3 pulley with None teeth in the catalogue')."""
-    assert main([command, LOOM, "--plot", "none"]) == 2
+def test_tradeoff_refuses_a_drive_without_a_belt(capsys):
+    """The trade-off searches a belt drive's rates: the loom's gearbox is refused in one line naming
+    transmission.type (it was 'no GT3 pulley with None teeth in the catalogue'); accuracy judges it
+    (tests/servo/test_gearbox_servo.py)."""
+    assert main(["tradeoff", LOOM, "--plot", "none"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "None" not in err
     assert "loom_beatup_servo.toml: transmission.type: is 'gearbox'" in err and "belt_pulley" in err

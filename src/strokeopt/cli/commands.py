@@ -145,26 +145,29 @@ def cmd_bench(args) -> int:
 def cmd_accuracy(args) -> int:
     from ..report.format import to_json
     from ..report.servo import accuracy_text, plot_accuracy
+    from ..report.machine import machine_of
     from ..servo.accuracy import accuracy_report
 
     problem = _load(args)
-    require_belt_drive(problem, "accuracy")
     stroke, label, extra = args.design_stroke, "", []
     if stroke is not None:
         label = f"optimal ({args.design_data.get('objective', 'design')})"
         extra = [(label, stroke)]  # its row in the table of the classic laws
     progress = progress_bar(args, "laws", "law", when=bool(args.compare_laws or extra))
     # with --design the whole report is of the design's stroke on its drive; the classic laws follow as a table
+    # a design's stroke is judged within its check tolerance (as its solve judged it), a classic law's exactly
+    tol = problem.design.check_tolerance if stroke is not None and problem.design is not None else 0.0
     report, result = accuracy_report(problem, problem.spm, stroke=stroke, label=label,
                                      compare_laws=args.compare_laws or bool(extra), extra_strokes=extra,
-                                     progress=progress)
+                                     progress=progress, tolerance=tol)
     report = {"status": report.pop("status"), **report, "drive": drive_used(args, problem)}
     if args.json:
         _emit(to_json(report))
     else:
         print(accuracy_text(report))
     tags = [f"design_{extra[0][0]}" if extra else report["label"], report["motor"]]
-    _write_figure(lambda p: plot_accuracy(result, p, report["motor"]),
+    output = machine_of(problem).output   # what the stroke moves: the bar, a rotary load
+    _write_figure(lambda p: plot_accuracy(result, p, report["motor"], output=output, cycle=problem),
                   _plot_path(args, "accuracy", spm_tag(problem.spm), *tags), args)
     if report["status"] != "ok":
         print(f"strokeopt: {report['verdict']}", file=sys.stderr)

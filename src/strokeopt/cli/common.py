@@ -124,13 +124,15 @@ def drive_used(args, problem, motor=None, pulley_teeth=None) -> dict:
 
 
 def require_belt_drive(problem, command: str) -> None:
-    """``accuracy`` and ``tradeoff`` model a belt drive's servo loop (motor, pulley, belt span, encoder): a
-    problem with another transmission (a gearbox, a screw and lever) is refused in one line naming it."""
+    """``tradeoff`` searches the rates of a belt drive (its pulley's sizing and the belt mode's phase): a problem
+    with another transmission (a gearbox, a screw and lever) is refused in one line naming it (``accuracy``
+    judges the servo loop of any constant-ratio drive)."""
     name = problem.transmission.name
     if name != "belt_pulley":
         raise ProblemError(str(problem.file), "transmission.type",
-                           f"is {name!r}; strokeopt {command} models the servo loop of a belt drive (motor, pulley "
-                           f"and belt span): it needs transmission.type = \"belt_pulley\" with pulley_teeth")
+                           f"is {name!r}; strokeopt {command} searches the rates of a belt drive (motor, pulley and belt "
+                           f"span): it needs transmission.type = \"belt_pulley\" with pulley_teeth (strokeopt accuracy "
+                           f"judges the servo loop of a gearbox drive too)")
 
 
 def step_angle(problem) -> float | None:

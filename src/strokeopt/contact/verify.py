@@ -53,7 +53,8 @@ def verification(result: SceneResult, lag_max: float | None = None, impact_veloc
         rows.append(_row("impact velocity", v, impact_velocity_max, "m/s", None if impact_velocity_max is None
                          else within_limit(v, impact_velocity_max, IMPACT_TOLERANCE)))
     if handover is not None:
-        rows.append(_row("handover accuracy", handover["value"], handover["limit"], "mm", bool(handover["ok"])))
+        rows.append(_row("handover accuracy", handover["value"], handover["limit"], handover.get("unit", "mm"),
+                         bool(handover["ok"])))
     rows += [_row(criterion, value, None, unit, None) for criterion, value, unit in reported]
     if implausible:
         from .plausible import implausible_text

@@ -51,6 +51,7 @@ from .transcription.solver import solver_options as _solver_options
 from ..drive.selection import resolve_drive
 from ..drive.checks import within_limit
 from ..errors import ProblemError, SolverError
+from ..io.load_units import error_unit
 from ..io.plain import format_value
 
 
@@ -192,7 +193,8 @@ def _judge(design: Design, best: Outcome, drive, terms: tuple) -> Design:
     if drive is not None and handover and not best.handover_values():
         why = ("the problem has no [servo] section (servo loop and belt model)" if not terms
                and getattr(problem, "servo", None) is None else "no handover error term applies (error_terms)")
-        notes.append(f"handover accuracy {settings.accuracy * 1e3:g} mm NOT checked: {why}")
+        scale, unit = error_unit(problem.timing.rotary)
+        notes.append(f"handover accuracy {settings.accuracy * scale:g} {unit} NOT checked: {why}")
     if best.fine["worst_relative_violation"] > settings.check_tolerance:
         notes.append(f"between collocation nodes a limit is exceeded by "
                             f"{100 * best.fine['worst_relative_violation']:.2f} % (more than check_tolerance "
@@ -221,12 +223,12 @@ def _with_terms(req: SolveRequest, best: Outcome) -> Outcome:
     t0 = time.perf_counter()
     nlp = prepare(replace(req, mesh=best.nlp.request.mesh, warm=best.sols, radius0=best.radius,
                           pin_times=best.nlp.request.pin_times))
-    total = nlp.graph.handover_total
+    total = nlp.graph.terms.handover.total
     if nlp.built.n_w == best.nlp.built.n_w:
         value = float(nlp.value(total, best.x).item()) if isinstance(total, (ca.MX, ca.SX)) else float(total)
         if value <= req.settings.accuracy:
             best.handover = [(n, float(nlp.value(v, best.x).item()) if isinstance(v, (ca.MX, ca.SX)) else float(v))
-                             for n, v in nlp.graph.handover_terms]
+                             for n, v in nlp.graph.terms.handover.terms]
             best.solve_time += time.perf_counter() - t0
             return best
     out = solve_one(replace(req, mesh=best.nlp.request.mesh, warm=best.sols, radius0=best.radius))
@@ -248,9 +250,10 @@ def _check_fixed_accuracy(problem, settings: DesignSettings, terms: tuple) -> No
     fixed = [(t.name, v) for t in terms for v in [t.fixed_error(problem)] if v is not None]
     total = sum(v for _, v in fixed)
     if total > settings.accuracy:
-        parts = ", ".join(f"{n} {v * 1e3:.3f} mm" for n, v in fixed)
+        scale, unit = error_unit(problem.timing.rotary)
+        parts = ", ".join(f"{n} {v * scale:.3f} {unit}" for n, v in fixed)
         raise SolverError(f"handover accuracy cannot be met: {parts} exceeds the allowed "
-                          f"{settings.accuracy * 1e3:g} mm by {(total - settings.accuracy) * 1e3:.3f} mm")
+                          f"{settings.accuracy * scale:g} {unit} by {(total - settings.accuracy) * scale:.3f} {unit}")
 
 
 #: The name every handover accuracy check row starts with (:class:`.limits.HandoverAccuracy`).
@@ -265,9 +268,11 @@ def verified_handover(checks: list[dict], value: float, what: str, tol: float) -
     terms = [c for c in checks if c["name"].startswith(HANDOVER_CHECK)]
     limit = float(terms[0]["limit"])
     term = next((c["design_term"] for c in terms if "design_term" in c), sum(float(c["value"]) for c in terms))
-    row = {"name": f"{HANDOVER_CHECK} ({what})", "value": value * 1e3, "limit": limit, "unit": "mm",
-           "margin": 1.0 - value * 1e3 / limit if limit > 0 else -math.inf,
-           "ok": within_limit(value * 1e3, limit, tol), "design_term": term}
+    unit = terms[0]["unit"]   # the rows' unit: mm, or deg for a rotary load
+    shown = value * error_unit(unit == "deg")[0]
+    row = {"name": f"{HANDOVER_CHECK} ({what})", "value": shown, "limit": limit, "unit": unit,
+           "margin": 1.0 - shown / limit if limit > 0 else -math.inf,
+           "ok": within_limit(shown, limit, tol), "design_term": term}
     return [c for c in checks if c not in terms] + [row]
 
 
@@ -300,8 +305,9 @@ def _report_checks(best: Outcome) -> tuple[list[dict], list[str]]:
     for (lim, _), g in zip(nlp.built.limits, nlp.limit_values(best.x)):
         if lim.is_enforced(req) and g > -1e-4:
             active.append(lim.name)
+    scale, unit = error_unit(req.problem.timing.rotary)
     for mv in req.moves:
         itv = req.problem.timing.intervals[mv.interval - 1]
         if itv.handover:
-            active.append(f"handover position: end of move {mv.index} at {(mv.start + mv.stroke) * 1e3:g} mm (exact)")
+            active.append(f"handover position: end of move {mv.index} at {(mv.start + mv.stroke) * scale:g} {unit} (exact)")
     return checks, active

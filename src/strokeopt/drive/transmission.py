@@ -382,12 +382,12 @@ class Gearbox(Transmission):
         trans.finish()
         return gear
 
-    def __init__(self, ratio: float, inertia: float = 0.0, label: str | None = None):
+    def __init__(self, ratio: float, inertia: float = 0.0, entry: str | None = None):
         if not (ratio > 0 and math.isfinite(ratio)):
             raise ValueError("gear ratio must be positive")
         if not (inertia >= 0 and math.isfinite(inertia)):
             raise ValueError("gearbox inertia must be zero or positive")
-        self.ratio, self.inertia, self.label = float(ratio), float(inertia), label
+        self.ratio, self.inertia, self.entry = float(ratio), float(inertia), entry
 
     def position(self, phi):
         return phi / self.ratio

@@ -64,3 +64,9 @@ def from_load_units(data):
     """``data`` with every rotary key back under its linear key (positions deg -> rad x 1e3): the form the
     readers of design files take. Data without rotary keys is returned as it is."""
     return _convert(data, LINEAR_KEYS, _mm)
+
+
+def error_unit(rotary: bool) -> tuple[float, str]:
+    """The scale from SI and the unit a load's position errors and accuracies are reported in: mm for a
+    linear load (SI x 1e3), deg for a rotary one (rad x 180/pi)."""
+    return (180.0 / math.pi, "deg") if rotary else (1e3, "mm")

@@ -170,11 +170,11 @@ def design_text(design: Design, comparison: list[dict] | None = None) -> str:
                                   title=f"checks (fine grid between collocation nodes; margin = 1 - value/limit; ok: "
                                         f"within the limit + check_tolerance "
                                         f"{100 * (design.settings or DesignSettings()).check_tolerance:g} %)"))
-        lines += [f"{c['name']}: {format_value(c['value'])} mm, the number `strokeopt accuracy --design` prints "
+        lines += [f"{c['name']}: {format_value(c['value'])} {c['unit']}, the number `strokeopt accuracy --design` prints "
                   f"(sampled position table, largest error over the handover window, plus one encoder count); "
                   f"the design term, which the solve constrains (the same simulation at instants over the handover "
                   f"window, the load forces linearised at the design), "
-                  f"gives {format_value(c['design_term'])} mm" for c in verified]
+                  f"gives {format_value(c['design_term'])} {c['unit']}" for c in verified]
         limit = next((c for c in design.checks if c["name"] == "peak_torque"), None)
         if limit is not None and design.motor_spec is not None and design.settings is not None:
             lines.append(f"torque limit {format_value(limit['limit'])} N m = "

@@ -19,13 +19,13 @@ from typing import Any
 
 import numpy as np
 
-from ..drive.checks import within_limit
 from . import html as h
 from .figures import PRINT_WIDTH_IN, legend_outside
 from .format import format_value, period_text
 from .machine import ELASTIC_CHAIN, NEEDLE_BAR, Machine, drive_text, machine_of
 from .units import direction_word, is_rotary, load_label
 from ..io.load_units import load_key, to_load_units
+from .accuracy_section import section_accuracy
 from .verification_section import section_verification
 
 #: The report's sections: (id, heading), in the order of the data flow; a report shows those its machine has
@@ -381,39 +381,6 @@ def section_drive(d: ReportData) -> str:
     drive = s.get("drive") or {}
     if drive:
         out += h.para(f"Motor and {'pulley' if d.machine.pulley else 'transmission'} from {drive.get('from')}.", "note")
-    return out
-
-
-def section_accuracy(d: ReportData) -> str:
-    if d.accuracy is None:
-        return h.para("Not predicted: the problem has no [servo] section (servo loop and belt model) or no motor.")
-    from .servo import plot_accuracy
-
-    a = d.accuracy.summary()
-    c, sc = a["contributions_mm"], a["signed_contributions_mm"]
-    rows = [[h.cell("servo tracking"), h.cell(sc["servo_tracking"], "accuracy.signed_contributions_mm.servo_tracking")],
-            [h.cell("belt stretch"), h.cell(sc["belt_stretch"], "accuracy.signed_contributions_mm.belt_stretch")],
-            [h.cell(f"  of it: {d.machine.output} inertia"), h.cell(sc["belt_stretch_inertia"])],
-            [h.cell("  of it: load forces"), h.cell(sc["belt_stretch_forces"])],
-            [h.cell("encoder (one count, a bound)"),
-             h.cell(c["encoder_quantisation"], "accuracy.contributions_mm.encoder_quantisation")],
-            [h.cell(f"handover error (largest over {a['handover_window_deg']:g} deg after the handover)"),
-             h.cell(a["handover_error_mm"], "accuracy.handover_error_mm")]]
-    limit = d.problem.design.accuracy * 1e3 if d.problem.design is not None else None
-    out = h.table(["contribution", "mm"], rows)
-    if limit is not None:
-        tol = d.problem.design.check_tolerance  # the solve's pass rule (drive.checks.within_limit)
-        out += h.para(f"Requirement {limit:g} mm: " + ("met" if within_limit(a["handover_error_mm"], limit, tol)
-                                                       else "NOT met")
-                      + f" (full servo simulation: sampled position table, worst of its phases). Belt mode "
-                      f"{a['belt_resonance_Hz']:.0f} Hz; residual belt vibration in the dwell "
-                      f"{a['residual_vibration_mm']:.4f} mm; peak torque command {a['peak_torque_command_N_m']:.3f} N m"
-                      + (f", ABOVE the torque limit {a['torque_limit_N_m']:.3f} N m: the drive saturates and the "
-                         "prediction does not hold." if a["torque_limited"] else "."))
-    out += h.svg_figure(plot_accuracy(d.accuracy, None, d.design.motor, output=d.machine.output),
-                        f"Commanded and actual position of the {d.machine.output}, and the error with its servo and "
-                        f"belt parts over the whole cycle; the handover window ({a['handover_window_deg']:g} deg) "
-                        f"shaded: handover error {a['handover_error_mm']:.4f} mm.")
     return out
 
 

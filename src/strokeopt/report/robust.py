@@ -32,7 +32,9 @@ def robust_text(report: dict) -> str:
             for s in report["sensitivity"]]
     cols = [("field", "tolerance")] + [c for c in COLUMNS if any(c[0] in s for s in sens)]
     lines += ["", format_table(sens, cols, title="which tolerances matter: Spearman rank correlation with each "
-                                                 "result (+1: rises with the part's value, 0: no effect)")]
+                                                 "result (+1: rises with the part's value, 0: no effect; -: the "
+                                                 "result does not vary over the samples beyond the simulation's "
+                                                 "resolution)")]
     return "\n".join(lines)
 
 
@@ -69,7 +71,7 @@ def plot_robust(report: dict, path, limits: dict | None = None):
     width = 0.8 / max(1, len(keys))
     y = np.arange(len(sens))
     for j, key in enumerate(keys):
-        axes[2].barh(y + j * width, [s.get(key, 0.0) for s in sens], height=width, label=dict(COLUMNS)[key])
+        axes[2].barh(y + j * width, [s.get(key) or 0.0 for s in sens], height=width, label=dict(COLUMNS)[key])
     axes[2].set_yticks(y + width * (len(keys) - 1) / 2, [s["field"].split(".")[-2] + "." + s["field"].split(".")[-1]
                                                          if s["field"].count(".") else s["field"] for s in sens])
     axes[2].set_xlim(-1, 1)

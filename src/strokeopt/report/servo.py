@@ -11,19 +11,38 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.load_units import error_unit
 from ..servo.accuracy import AccuracyResult
 from .figures import frame_label
+from ..io.cycle import cycle_of
 from .format import drive_text, format_table, format_value
 
 
 # --------------------------------------------------------------------------- strokeopt accuracy
 
 
+def _axis_lines(report: dict) -> list[str]:
+    """The drive's mechanics in the report's words: a belt's pulley and stiffness, or a gearbox's ratio and torsion."""
+    if report.get("position_unit") == "deg":
+        return [f"{report['problem']} at {cycle_of(report).rate(report['spm'])}, {report['label']}: motor {report['motor']}, "
+                f"{report['compliance']} ratio {report['ratio']:g}, load inertia {report['load_inertia_kg_m2']:g} kg m^2",
+                f"{report['compliance']} {report['torsional_stiffness_N_m_arcmin']:g} N m/arcmin at the load "
+                f"({report['stiffness_source']}), torsional mode {report['resonance_Hz']:.0f} Hz"]
+    return [f"{report['problem']} at {cycle_of(report).rate(report['spm'])}, {report['label']}: motor {report['motor']}, "
+            f"pulley PD {report['pulley_pitch_diameter_mm']:.2f} mm, moving mass {report['moving_mass_kg']:g} kg",
+            f"belt {report['belt_stiffness_N_per_mm']:.0f} N/mm at the carrier ({report['belt_stiffness_source']}), "
+            f"belt mode {report['belt_resonance_Hz']:.0f} Hz"]
+
+
 def accuracy_text(report: dict) -> str:
     """The text of ``strokeopt accuracy`` from the report of :func:`~strokeopt.servo.accuracy.accuracy_report`."""
     g = report["gains"]
-    c = report["contributions_mm"]
-    sc = report["signed_contributions_mm"]
+    u = report.get("position_unit", "mm")
+    c = report[f"contributions_{u}"]
+    sc = report[f"signed_contributions_{u}"]
+    rotary = u == "deg"
+    stretch = "gearbox wind-up" if rotary else "belt stretch"
+    stretch_key = "max_stretch_deg" if rotary else "max_belt_stretch_mm"
     lines = []
     used = report.get("drive")
     if used:
@@ -35,10 +54,7 @@ def accuracy_text(report: dict) -> str:
         lines.append("  note: the design's handover term is this simulation's error, linear in the stroke (the load "
                      "forces linearised about the solve's start); below is the full simulation of the loop")
     lines += [
-        f"{report['problem']} at {report['spm']:g} spm, {report['label']}: motor {report['motor']}, "
-        f"pulley PD {report['pulley_pitch_diameter_mm']:.2f} mm, moving mass {report['moving_mass_kg']:g} kg",
-        f"belt {report['belt_stiffness_N_per_mm']:.0f} N/mm at the carrier ({report['belt_stiffness_source']}), "
-        f"belt mode {report['belt_resonance_Hz']:.0f} Hz",
+        *_axis_lines(report),
         f"servo loop: Kp {g['position_gain_1_s']:.1f} 1/s, Kv {g['speed_gain_N_m_s_rad']:.4g} N m s/rad, "
         f"Ti {g['speed_integral_time_ms']:.2f} ms, speed bandwidth {g['speed_bandwidth_Hz']:.1f} Hz; "
         f"loop delay {report['loop_delay_us']:.0f} us; feed-forward velocity "
@@ -49,15 +65,16 @@ def accuracy_text(report: dict) -> str:
         f"modulus {report['margins']['modulus_margin']:.2f}",
         "",
         f"handover error (largest over {report['handover_window_deg']:g} deg after the end of the handover move at "
-        f"{report['handover_angle_deg']:.1f} deg): {format_value(report['handover_error_mm'])} mm "
-        f"(requirement {report['requirement_mm']:g} mm)",
-        f"  servo tracking        {sc['servo_tracking']:+.4f} mm  (pulley {report['pulley_error_at_handover_deg']:.3f} deg)",
-        f"  belt stretch          {sc['belt_stretch']:+.4f} mm  (inertia {sc['belt_stretch_inertia']:+.4f}, "
+        f"{report['handover_angle_deg']:.1f} deg): {format_value(report[f'handover_error_{u}'])} {u} "
+        f"(requirement {report[f'requirement_{u}']:g} {u})",
+        f"  servo tracking        {sc['servo_tracking']:+.4f} {u}  ({'motor' if rotary else 'pulley'} {report['pulley_error_at_handover_deg']:.3f} deg)",
+        f"  {stretch:20s}  {sc['belt_stretch']:+.4f} {u}  (inertia {sc['belt_stretch_inertia']:+.4f}, "
         f"forces {sc['belt_stretch_forces']:+.4f})",
-        f"  encoder quantisation  {c['encoder_quantisation']:.4f} mm  (one count, added as a bound)",
-        f"over the cycle: max error {report['max_error_mm']:.4f} mm, max servo error "
-        f"{report['max_servo_error_mm']:.4f} mm, max belt stretch {report['max_belt_stretch_mm']:.4f} mm; "
-        f"residual belt vibration in the dwell after the handover {report['residual_vibration_mm']:.4f} mm",
+        f"  encoder quantisation  {c['encoder_quantisation']:.4f} {u}  (one count, added as a bound)",
+        f"over the cycle: max error {report[f'max_error_{u}']:.4f} {u}, max servo error "
+        f"{report[f'max_servo_error_{u}']:.4f} {u}, max {stretch} {report[stretch_key]:.4f} {u}; "
+        f"residual {report['compliance']} vibration in the dwell after the handover "
+        f"{report[f'residual_vibration_{u}']:.4f} {u}",
         f"peak torque command {report['peak_torque_command_N_m']:.3f} N m (torque limit "
         f"{format_value(report['torque_limit_N_m'])} N m = {report.get('torque_limit_basis', 'min(motor peak, drive peak limit x rated)')})",
         f"  {report['torque_basis']}",
@@ -67,46 +84,54 @@ def accuracy_text(report: dict) -> str:
                      "above does not hold")
     if "laws" in report:
         lines += ["", format_table(report["laws"], [
-            ("law", "law"), ("handover_error_mm", "handover mm"), ("residual_vibration_mm", "residual belt vib. mm"),
-            ("max_error_mm", "max error mm"), ("max_belt_stretch_mm", "max belt mm"),
+            ("law", "law"), (f"handover_error_{u}", f"handover {u}"),
+            (f"residual_vibration_{u}", f"residual {report['compliance']} vib. {u}"),
+            (f"max_error_{u}", f"max error {u}"), (stretch_key, f"max {'wind-up' if rotary else 'belt'} {u}"),
             ("peak_torque_command_N_m", "peak torque N m"), ("torque_limited", "saturates")],
-            title=f"Motion laws at {report['spm']:g} spm on the same drive")]
+            title=f"Motion laws at {cycle_of(report).rate(report['spm'])} on the same drive")]
     if "verdict" in report:
         lines += ["", report["verdict"]]
     return "\n".join(lines)
 
 
 def plot_accuracy(result: AccuracyResult, path: str | Path | None = None, motor: str | None = None,
-                  output: str = "bar"):
+                  output: str = "bar", cycle=None):
     """Commanded vs. actual position of the ``output`` (problem frame), and the error and its parts over the
-    cam angle."""
+    cam angle; ``cycle``: the machine's cycle (a problem, or its :class:`~strokeopt.io.cycle.MachineCycle`) that
+    names the rate (default: stitches)."""
     import matplotlib.pyplot as plt
 
     from .figures import PRINT_WIDTH_IN, legend_outside
 
     fig, axes = plt.subplots(2, 1, sharex=True, figsize=(PRINT_WIDTH_IN, 6.2), constrained_layout=True)
+    axis = result.loop.axis
+    scale, u = error_unit(axis.rotary)
+    fmt = ".4f" if axis.rotary else ".3f"
     ang = result.angle_deg
     ax = axes[0]
-    ax.plot(ang, result.s_cmd * 1e3, lw=1.4, label="commanded")
-    ax.plot(ang, result.x * 1e3, lw=1.0, ls="--", label=f"actual ({output})")
-    ax.set_ylabel(frame_label(f"{output} position", "mm"))
+    ax.plot(ang, result.s_cmd * scale, lw=1.4, label="commanded")
+    ax.plot(ang, result.x * scale, lw=1.0, ls="--", label=f"actual ({output})")
+    ax.set_ylabel(frame_label(f"{output} position", u, axis.rotary))
     ax = axes[1]
-    ax.plot(ang, result.error * 1e3, lw=1.4, color="k", label=f"{output} error")
-    ax.plot(ang, result.servo * 1e3, lw=1.0, label="servo tracking")
-    ax.plot(ang, result.belt * 1e3, lw=1.0, label="belt stretch")
-    ax.set_ylabel("error [mm]\n(commanded - actual)")
+    ax.plot(ang, result.error * scale, lw=1.4, color="k", label=f"{output} error")
+    ax.plot(ang, result.servo * scale, lw=1.0, label="servo tracking")
+    ax.plot(ang, result.belt * scale, lw=1.0, label="gearbox wind-up" if axis.rotary else "belt stretch")
+    ax.set_ylabel(f"error [{u}]\n(commanded - actual)")
     h_ang = 360.0 * (result.handover_time - result.loop.settings.sum_small_time_constants) / result.period
     for a in axes:
         a.axvline(h_ang, color="tab:red", ls="--", lw=1)
+        over = h_ang + result.loop.settings.handover_window - 360.0
+        if over > 0:  # a window past the cycle's end continues at its start
+            a.axvspan(0.0, over, color="tab:red", alpha=0.08, lw=0)
         a.axvspan(h_ang, h_ang + result.loop.settings.handover_window, color="tab:red", alpha=0.08, lw=0,
-                  label=f"handover window, error {result.handover_error * 1e3:.3f} mm" if a is axes[1] else "handover")
+                  label=f"handover window, error {result.handover_error * scale:{fmt}} {u}" if a is axes[1] else "handover")
         a.grid(True, alpha=0.3)
         legend_outside(a)
     axes[1].set_xlabel("cam angle [deg] (360 deg = one cam cycle)")
     axes[1].set_xlim(0, 360)
     axes[1].set_xticks(np.arange(0, 361, 45))
     on = f" on {motor}" if motor else ""
-    axes[0].set_title(f"{result.label}{on} at {result.spm:g} spm: handover error {result.handover_error * 1e3:.3f} mm")
+    axes[0].set_title(f"{result.label}{on} at {cycle_of(cycle).rate(result.spm)}: handover error {result.handover_error * scale:{fmt}} {u}")
     if path is not None:
         from .figures import fit_titles
 

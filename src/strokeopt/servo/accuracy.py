@@ -33,11 +33,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..drive.checks import torque_limit_text
+from ..drive.checks import torque_limit_text, within_limit
+from ..io.load_units import error_unit
 from .loop import (Gains, ServoLoop, build_loop, cycle_grid, loop_margins, periodic_response, reference_signals,
                    tuned_gains)
 from .plant import DriveAxis, axis_from_problem
-from .settings import ServoSettings, check_sampling, settings_of
+from .settings import ARCMIN, ServoSettings, check_sampling, settings_of
 
 #: Keys of ``contributions_mm`` in an accuracy report.
 CONTRIBUTIONS = ("servo_tracking", "belt_stretch", "encoder_quantisation")
@@ -135,38 +136,46 @@ class AccuracyResult:
                 "belt_stretch_inertia": belt - belt_load, "belt_stretch_forces": belt_load}
 
     def summary(self) -> dict:
-        mm = 1e3
-        c = self.contributions()
+        """The numbers of the report in the load's units: a bar's in mm (``handover_error_mm``, the belt's
+        ``max_belt_stretch_mm``), a rotary load's in deg (``handover_error_deg``, ``max_stretch_deg``: the
+        gearbox's wind-up); ``position_unit`` says which, ``compliance`` names the elastic element."""
         axis = self.loop.axis
-        return {
+        scale, u = error_unit(axis.rotary)
+        c = self.contributions()
+        out = {
             "spm": self.spm,
             "label": self.label,
-            "handover_error_mm": self.handover_error * mm,
-            "contributions_mm": {k: abs(c[k]) * mm for k in CONTRIBUTIONS},
-            "signed_contributions_mm": {k: v * mm for k, v in c.items()},
+            "position_unit": u,
+            "compliance": axis.compliance,
+            f"handover_error_{u}": self.handover_error * scale,
+            f"contributions_{u}": {k: abs(c[k]) * scale for k in CONTRIBUTIONS},
+            f"signed_contributions_{u}": {k: v * scale for k, v in c.items()},
             "handover_window_deg": self.loop.settings.handover_window,
             "handover_angle_deg": 360.0 * (self.handover_time - self.loop.settings.sum_small_time_constants) / self.period,
             "pulley_error_at_handover_deg": math.degrees(abs(c["servo_tracking"]) / axis.radius),
-            "max_error_mm": float(np.max(np.abs(self.error))) * mm,
-            "max_servo_error_mm": float(np.max(np.abs(self.servo))) * mm,
-            "max_belt_stretch_mm": float(np.max(np.abs(self.belt))) * mm,
-            "residual_vibration_mm": self.residual_vibration * mm,
+            f"max_error_{u}": float(np.max(np.abs(self.error))) * scale,
+            f"max_servo_error_{u}": float(np.max(np.abs(self.servo))) * scale,
+            f"residual_vibration_{u}": self.residual_vibration * scale,
             "peak_torque_command_N_m": self.peak_torque_command,
             "torque_limit_N_m": self.torque_limit,
             "torque_limited": self.torque_limited,
             "motor": axis.motor,
-            "pulley_pitch_diameter_mm": 2 * axis.radius * mm,
-            "moving_mass_kg": axis.mass,
-            "belt_stiffness_N_per_mm": axis.belt_stiffness * 1e-3,
-            "belt_stiffness_source": axis.belt_note,
-            "belt_resonance_Hz": axis.resonance_hz,
-            "encoder_count_at_bar_um": self.quantisation * 1e6,
             "loop_delay_us": self.loop.settings.sum_small_time_constants * 1e6,
             "velocity_feedforward": self.loop.settings.velocity_feedforward,
             "acceleration_feedforward": self.loop.settings.acceleration_feedforward,
             "gains": self.loop.gains.as_dict(),
         }
-
+        if axis.rotary:  # a gearbox to a turning load: its ratio, wind-up and torsional stiffness
+            out.update({"max_stretch_deg": float(np.max(np.abs(self.belt))) * scale, "ratio": 1 / axis.radius,
+                        "load_inertia_kg_m2": axis.mass, "torsional_stiffness_N_m_arcmin": axis.belt_stiffness * ARCMIN,
+                        "stiffness_source": axis.belt_note, "resonance_Hz": axis.resonance_hz,
+                        "encoder_count_at_load_arcsec": math.degrees(self.quantisation) * 3600})
+        else:
+            out.update({"max_belt_stretch_mm": float(np.max(np.abs(self.belt))) * scale,
+                        "pulley_pitch_diameter_mm": 2 * axis.radius * 1e3, "moving_mass_kg": axis.mass,
+                        "belt_stiffness_N_per_mm": axis.belt_stiffness * 1e-3, "belt_stiffness_source": axis.belt_note,
+                        "belt_resonance_Hz": axis.resonance_hz, "encoder_count_at_bar_um": self.quantisation * 1e6})
+        return out
 
 #: Table phases tried (fractions of the table interval); the result is the worst of them.
 TABLE_PHASES = (0.0, 0.25, 0.5, 0.75)
@@ -256,6 +265,7 @@ def residual_vibration_table(problem, spm: float | None = None, strokes=(), *,
     settings = settings_of(problem, settings)
     axis = axis or axis_from_problem(problem, settings)
     gains = gains or tuned_gains(axis, settings)
+    scale, u = error_unit(axis.rotary)
     cases = []
     for name in LAW_NAMES:
         law = problem.default_law if name == problem.default_law.name else make_law(name)
@@ -264,10 +274,10 @@ def residual_vibration_table(problem, spm: float | None = None, strokes=(), *,
     rows = []
     for label, make in (progress(cases) if progress else cases):
         res = handover_accuracy(problem, make(), spm, settings=settings, axis=axis, gains=gains, label=label)
-        rows.append({"law": label, "handover_error_mm": res.handover_error * 1e3,
-                     "residual_vibration_mm": res.residual_vibration * 1e3,
-                     "max_error_mm": float(np.max(np.abs(res.error))) * 1e3,
-                     "max_belt_stretch_mm": float(np.max(np.abs(res.belt))) * 1e3,
+        rows.append({"law": label, f"handover_error_{u}": res.handover_error * scale,
+                     f"residual_vibration_{u}": res.residual_vibration * scale,
+                     f"max_error_{u}": float(np.max(np.abs(res.error))) * scale,
+                     ("max_stretch_deg" if axis.rotary else "max_belt_stretch_mm"): float(np.max(np.abs(res.belt))) * scale,
                      "peak_torque_command_N_m": res.peak_torque_command, "torque_limited": res.torque_limited})
     return rows
 
@@ -282,32 +292,37 @@ TORQUE_BASIS = ("torque = the servo's torque command (rigid load + loop dynamics
 
 
 def accuracy_report(problem, spm: float | None = None, *, stroke=None, label: str = "", compare_laws: bool = False,
-                    extra_strokes=(), progress=None) -> tuple[dict, AccuracyResult]:
+                    extra_strokes=(), progress=None, tolerance: float = 0.0) -> tuple[dict, AccuracyResult]:
     """The report of ``strokeopt accuracy``: the prediction for ``stroke`` (default: the problem's
     own law; ``label`` names it) and, with ``compare_laws``, the handover error and residual
     vibration of every classic law (plus ``extra_strokes``: ``(label, StrokeFunction)`` pairs).
-    ``progress`` wraps an iterable (tqdm)."""
+    ``progress`` wraps an iterable (tqdm). The error is judged by the one pass rule
+    (:func:`~strokeopt.drive.checks.within_limit`) within ``tolerance``: a design's ``check_tolerance`` for a
+    design's stroke, 0 for a classic law."""
     spm = problem.spm if spm is None else float(spm)
     settings = settings_of(problem)
     axis = axis_from_problem(problem, settings)
     gains = tuned_gains(axis, settings)
     result = handover_accuracy(problem, stroke, spm=spm, settings=settings, axis=axis, gains=gains, label=label)
     design = getattr(problem, "design", None)
-    requirement = design.accuracy if design is not None else 0.5e-3  # digest A.1: within 0.5 mm
+    scale, u = error_unit(axis.rotary)
+    # digest A.1: within 0.5 mm (a rotary load's default: design/transcription/settings.py)
+    requirement = design.accuracy if design is not None else (math.radians(0.05) if axis.rotary else 0.5e-3)
     motor = problem.drive.catalogue().motor(axis.motor)
-    report = {"problem": problem.name, **result.summary(), "requirement_mm": requirement * 1e3,
+    report = {"problem": problem.name, "cycle": problem.cycle.noun, **result.summary(),
+              f"requirement_{u}": requirement * scale,
               "torque_limit_basis": torque_limit_text(motor, problem.drive.limits),
               "torque_basis": TORQUE_BASIS,
               "margins": loop_margins(axis, settings, gains)}
     broken = []
-    if result.handover_error > requirement:
-        broken.append(f"handover error {result.handover_error * 1e3:.4f} mm > requirement {requirement * 1e3:g} mm")
+    if not within_limit(result.handover_error, requirement, tolerance):
+        broken.append(f"handover error {result.handover_error * scale:.4f} {u} > requirement {requirement * scale:g} {u}")
     if result.torque_limited:
         broken.append(f"torque command {result.peak_torque_command:.3f} N m > torque limit {axis.torque_limit:.3f} "
                       "N m (the drive saturates)")
     report["status"] = "limits exceeded" if broken else "ok"
     report["verdict"] = ("limits exceeded: " + "; ".join(broken) if broken else
-                         f"ok: handover error {result.handover_error * 1e3:.4f} mm within {requirement * 1e3:g} mm, "
+                         f"ok: handover error {result.handover_error * scale:.4f} {u} within {requirement * scale:g} {u}, "
                          f"torque command within the torque limit {axis.torque_limit:.3f} N m")
     if compare_laws:
         report["laws"] = residual_vibration_table(problem, spm, extra_strokes, settings=settings, axis=axis,

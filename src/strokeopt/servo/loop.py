@@ -108,10 +108,10 @@ def tune(axis: DriveAxis, settings: ServoSettings) -> Gains:
         if hi - lo < 1e-3 * wc0:
             break
     if lo <= 0:
-        raise SolverError("no speed-loop bandwidth gives a robust servo loop with this belt and motor")
+        raise SolverError(f"no speed-loop bandwidth gives a robust servo loop with this {axis.compliance} and motor")
     return _rule_gains(axis, lo, f"symmetric optimum, w_c = 1/(2 T_sigma) = {wc0 / (2 * math.pi):.0f} Hz lowered "
                                  f"for gain margin {MIN_GAIN_MARGIN:g} and modulus margin {MIN_MODULUS_MARGIN:g} "
-                                 f"(belt resonance {axis.resonance_hz:.0f} Hz)")
+                                 f"({axis.compliance} resonance {axis.resonance_hz:.0f} Hz)")
 
 
 @functools.lru_cache(maxsize=64)
@@ -234,7 +234,7 @@ def build_loop(axis: DriveAxis, settings: ServoSettings, gains: Gains | None = N
     if loop.stability_margin() >= 0:
         raise SolverError(f"the servo loop is unstable with these gains (Kp = {kp:.4g} 1/s, Kv = {kv:.4g} N m s/rad, "
                           f"Ti = {ti * 1e3:.4g} ms, loop delay {settings.sum_small_time_constants * 1e6:.0f} us, "
-                          f"belt resonance {axis.resonance_hz:.0f} Hz): lower the speed bandwidth or the gains")
+                          f"{axis.compliance} resonance {axis.resonance_hz:.0f} Hz): lower the speed bandwidth or the gains")
     return loop
 
 

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..drive.checks import torque_limit
+from ..drive.transmission import BeltPulley
 from ..errors import ProblemError
 from .settings import ServoSettings, settings_of
 
@@ -47,7 +48,13 @@ GT3_GLASS_SPECIFIC_STIFFNESS_N_PER_MM = 5500.0
 
 @dataclass(frozen=True)
 class DriveAxis:
-    """The mechanics of one servo axis with a belt to a translating bar, SI units."""
+    """The mechanics of one servo axis: a motor, an elastic element and the load, SI units.
+
+    A belt to a translating bar (``radius`` the pulley's [m], ``mass`` [kg], ``belt_stiffness`` at the carrier
+    [N/m]), or a gearbox to a rotary load (``rotary``: ``radius`` the ratio 1/i [rad/rad], ``mass`` the load's
+    inertia [kg m^2], ``belt_stiffness`` the gearbox's torsional stiffness at the load [N m/rad]); the
+    equations are the same two-mass system. ``compliance`` names the elastic element ("belt", "gearbox").
+    """
 
     motor_inertia: float  # rotor + driving pulley [kg m^2]
     radius: float  # pulley pitch radius [m]
@@ -58,6 +65,8 @@ class DriveAxis:
     load: object = None  # drive.Load (gravity and load forces), or None
     motor: str = ""
     belt_note: str = ""
+    rotary: bool = False
+    compliance: str = "belt"
 
     @property
     def total_inertia(self) -> float:
@@ -100,6 +109,31 @@ def belt_stiffness(specific_stiffness: float, width: float, span: float, carrier
     return ea / l1 + ea / l2
 
 
+def _torsion_axis(problem, settings: ServoSettings, motor, catalogue) -> DriveAxis:
+    """The axis of a drive without a belt: the motor, the transmission's constant ratio and the torsional
+    stiffness of its gearbox or shaft at the load (``[servo] torsional_stiffness_N_m_arcmin``)."""
+    file, drive, tr = str(problem.file), problem.drive, problem.transmission
+    positions = np.array([p for i in problem.timing.intervals for p in (i.start_position, i.end_position)])
+    mu = np.abs(np.ravel(tr.transfer(np.ravel(tr.motor_angle(positions)))[1]))   # the ratio over the stroke
+    if not mu.max() - mu.min() <= 1e-9 * mu.max():
+        raise ProblemError(file, "transmission.type", f"is {tr.name!r}: the servo model holds a constant ratio "
+                                                      f"(belt_pulley or gearbox); a {tr.label}'s changes with its position")
+    if motor is None:
+        if drive.motor is None:
+            raise ProblemError(file, "drive.motor", "name the motor of the axis (a catalogue name)")
+        motor = catalogue.motor(drive.motor, (file, "drive.motor"))   # a servo motor: a stepper has no loop
+    if settings.torsional_stiffness is None:
+        raise ProblemError(file, "servo.torsional_stiffness_N_m_arcmin",
+                           f"is required for the servo model of a {tr.label}: the torsional stiffness of the gearbox "
+                           "(or shaft) at the load, from its data sheet, in N m/arcmin")
+    r, k = float(np.ravel(tr.transfer(np.zeros(1))[1])[0]), settings.torsional_stiffness
+    j = motor.rotor_inertia + tr.inertia
+    m = drive.load.moving_mass
+    c = 2 * settings.torsional_damping_ratio * math.sqrt(k / (1 / m + r**2 / j))
+    return DriveAxis(j, r, m, k, c, torque_limit(motor, drive.limits), drive.load, motor.name,
+                     "[servo] torsional_stiffness_N_m_arcmin", problem.timing.rotary, tr.label)
+
+
 def axis_from_problem(problem, settings: ServoSettings | None = None, *, motor=None, pulley_teeth: int | None = None,
                       radius: float | None = None, resolved=None) -> DriveAxis:
     """The :class:`DriveAxis` of a problem: motor, pulley, belt and load from its ``[drive]``
@@ -111,6 +145,10 @@ def axis_from_problem(problem, settings: ServoSettings | None = None, *, motor=N
     if drive is None:
         raise ProblemError(file, "drive", "the servo model needs the [drive] section (motor, moving_mass_kg)")
     catalogue = drive.catalogue() if resolved is None else resolved.catalogue
+    if not isinstance(problem.transmission, BeltPulley):
+        if resolved is not None and resolved.actuator is not None:
+            motor = resolved.actuator
+        return _torsion_axis(problem, settings, motor, catalogue)
     if resolved is not None and resolved.radius is not None:
         motor, radius, j_pulley = resolved.actuator, resolved.radius, resolved.pulley_inertia
     if motor is None:

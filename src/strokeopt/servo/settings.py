@@ -42,6 +42,10 @@ class ServoSettings:
     belt_specific_stiffness: float | None = None  # N per unit strain per m of width (None: catalogue or estimate)
     belt_width: float = 9e-3  # m, used when no belt is named in [drive]
     belt_damping_ratio: float = 0.05
+    #: a drive without a belt (a gearbox): the torsional stiffness of the gearbox or shaft at the load [N m/rad]
+    #: and the damping ratio of that mode
+    torsional_stiffness: float | None = None
+    torsional_damping_ratio: float = 0.05
     pade_order: int = 3
     handover_window: float = 10.0  # deg of cam angle after the end of the handover move
     file: str = ""
@@ -52,12 +56,29 @@ class ServoSettings:
         return 1.5 * self.position_sampling + self.current_loop_time_constant
 
 
-def parse_servo(f, timing=None, spm: float | None = None) -> ServoSettings:
+#: The ``[servo]`` keys of a belt's geometry and stiffness, and those of a drive without a belt: a problem states
+#: the ones of its own transmission.
+BELT_KEYS = ("belt_span_mm", "carrier_from_pulley_mm", "belt_length_mm", "belt_specific_stiffness_N_per_mm",
+             "belt_width_mm", "belt_damping_ratio")
+TORSION_KEYS = ("torsional_stiffness_N_m_arcmin", "torsional_damping_ratio")
+ARCMIN = math.pi / (180 * 60)
+
+
+def parse_servo(f, timing=None, spm: float | None = None, transmission=None) -> ServoSettings:
     """Read the ``[servo]`` table (a :class:`~strokeopt.io.fields.Fields`).
 
     With ``timing`` and ``spm`` it also checks that the sampling is shorter
-    than the shortest move.
+    than the shortest move. With ``transmission`` it refuses the keys of another kind of drive: a belt's
+    geometry where there is no belt pulley, a torsional stiffness where there is one.
     """
+    if transmission is not None:
+        belt = transmission.name == "belt_pulley"
+        for key in (TORSION_KEYS if belt else BELT_KEYS):
+            if f.has(key):
+                raise f.error(key, f"is for a drive {'without a belt' if belt else 'with a belt'}; the transmission is "
+                                   f"a {transmission.label}: its elastic mode is "
+                                   + ("the belt's (belt_span_mm, belt_damping_ratio)" if belt else
+                                      "the torsion of its gearbox or shaft (torsional_stiffness_N_m_arcmin)"))
     s = ServoSettings(file=f.file)
     # servo drives sample and read their tables every 31.25 us to a few ms: 1 us to 100 ms is plausible
     tp = f.number("position_sampling_us", 250.0, min=1.0, max=1e5) * 1e-6
@@ -100,6 +121,10 @@ def parse_servo(f, timing=None, spm: float | None = None) -> ServoSettings:
     stiff = f.number("belt_specific_stiffness_N_per_mm", None, min=100.0, max=1e7)
     width = f.number("belt_width_mm", 9.0, min=1.0, max=1e3) * 1e-3
     zeta = f.number("belt_damping_ratio", 0.05, positive=True, max=1.0)
+    # gearboxes' data sheets give the torsional stiffness at the output in N m/arcmin: a small planetary about 1, a
+    # large one several hundred; 0.01 to 1e5 leaves a decade each way
+    torsion = f.number("torsional_stiffness_N_m_arcmin", None, min=0.01, max=1e5)
+    torsion_zeta = f.number("torsional_damping_ratio", 0.05, positive=True, max=1.0)
     order = f.number("pade_order", 3, integer=True, min=1, max=8)
     window = f.number("handover_window_deg", 10.0, min=0.0, max=90.0)
     f.finish()
@@ -112,7 +137,9 @@ def parse_servo(f, timing=None, spm: float | None = None) -> ServoSettings:
                    speed_integral_time=None if tn is None else tn * 1e-3, belt_span=span,
                    carrier_from_pulley=carrier, belt_length=length,
                    belt_specific_stiffness=None if stiff is None else stiff * 1e3, belt_width=width,
-                   belt_damping_ratio=zeta, pade_order=order, handover_window=window)
+                   belt_damping_ratio=zeta, pade_order=order, handover_window=window,
+                   torsional_stiffness=None if torsion is None else torsion / ARCMIN,
+                   torsional_damping_ratio=torsion_zeta)
 
 
 def shortest_move(timing, spm: float) -> float:

@@ -111,8 +111,9 @@ def search_below(problem, hi: Trial, settings, acc: float, resolution: float, lo
                 return Trial(spm, math.inf, exc.reason)
             warm = d
             t = confirm(problem, d, spm, acc)
+            tol = d.settings.check_tolerance if d.settings is not None else 0.0
             res = t.result
-            if t.ok or not res.torque_limited or res.handover_error > acc:
+            if t.ok or not res.torque_limited or not within_limit(res.handover_error, acc, tol):
                 break
             # the loop's torque command passes the limit the rigid load meets: more in reserve, here and above
             settings = replace(settings, torque_reserve=more_reserve(settings.torque_reserve, res))

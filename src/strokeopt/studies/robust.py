@@ -172,6 +172,9 @@ def _sample_step(shared, item, warm):
 #: The contact scene of a sample: the default integration without locating each peak force between the output
 #: points (no force is judged by its size here; the plausibility bound is far above the grid's error).
 SAMPLE_SCENE_OPTIONS = SimulationOptions(peaks=False)
+#: The relative spread of a result over the samples below which it has no rank correlation (10 x the sampled
+#: scene's rtol): the contact-aware design's impact speed varies by 4e-5 over 16 machines, the integrator's noise.
+NOT_VARYING = 10 * SAMPLE_SCENE_OPTIONS.rtol
 
 
 #: The drive checks a sample reports, by their keys in its row (the unit in the name).
@@ -189,9 +192,10 @@ def judge_sample(design, overrides: list[str]) -> dict:
     verified = verify_design(sampled, options=SAMPLE_SCENE_OPTIONS)
     row, failed = {}, []
     if verified.accuracy is not None:
-        limit = design.settings.accuracy if design.settings is not None else None
         row["handover_error_mm"] = verified.accuracy.handover_error * 1e3
-        if limit is not None and verified.accuracy.handover_error > limit:
+        # the verified design's own row: the one pass rule within the design's check tolerance (verified_handover)
+        judged = next((c for c in verified.design.checks if c["name"].startswith("handover accuracy")), None)
+        if judged is not None and not judged["ok"]:
             failed.append("handover accuracy")
     for c in (verified.verification or {}).get("criteria", []):
         key = {"lag": "max_lag_mm", "impact velocity": "impact_velocity_m_s",
@@ -253,8 +257,12 @@ def summarise(rows: list[dict], tolerances: list[Tolerance], design, method: str
         for key in RESPONSES:
             y = np.array([r.get(key, np.nan) for r in rows], float)
             ok = np.isfinite(y)
-            if ok.sum() >= 8 and np.ptp(y[ok]) > 0 and np.ptp(x[ok]) > 0:
-                entry[key] = float(spearmanr(x[ok], y[ok]).statistic)
+            # a result that varies by less than the contact simulation resolves (10 x its rtol, relative) over the
+            # samples does not vary: its ranks would be the integrator's noise, not the part's effect
+            if ok.sum() < 8 or not np.ptp(x[ok]) > 0:
+                continue
+            varies = np.ptp(y[ok]) > NOT_VARYING * np.max(np.abs(y[ok]))
+            entry[key] = float(spearmanr(x[ok], y[ok]).statistic) if varies else None   # None: does not vary
         sens.append(entry)
     worst = sorted(rows, key=lambda r: (len(r.get("failed", [])), r.get("handover_error_mm", 0.0)), reverse=True)[:5]
     return {"status": "ok", "problem": design.problem.name, "spm": design.spm, "samples": n, "method": method,

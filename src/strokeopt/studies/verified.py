@@ -186,7 +186,8 @@ def _verdict(design, block: dict | None, unjudged: tuple) -> str:
     handover = next((c for c in design.checks if c["name"].startswith("handover accuracy")), None)
     met = []
     if handover is not None:
-        met.append(f"handover error {handover['value']:.4g} mm <= {handover['limit']:g} mm")
+        unit = handover.get("unit", "mm")
+        met.append(f"handover error {handover['value']:.4g} {unit} <= {handover['limit']:g} {unit}")
     if block is not None:
         met += [r["criterion"] for r in block["criteria"] if r["ok"] is True and r["criterion"] != "handover accuracy"]
     where = f" (scene {block['scene']!r})" if block is not None else ""

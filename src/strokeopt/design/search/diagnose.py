@@ -17,6 +17,7 @@ from ..transcription.nlp import prepare
 from ..transcription.request import SolveRequest
 from ..transcription.solver import STATUS_OK, solve_nlp
 from ...errors import LimitError, SolverError
+from ...io.load_units import error_unit
 
 
 def diagnose(req: SolveRequest, status: str) -> SolverError:
@@ -91,8 +92,9 @@ def need_text(lim: LimitGroup, need: float, name: str) -> str:
         return lim.describe(need)
     over = f" ({100 * (need / lim.limit - 1):.1f} % over)" if lim.limit else ""
     unit, shown_need, shown_lim = lim.unit, need, lim.limit
-    if unit == "m":
-        shown_need, shown_lim, unit = need * 1e3, lim.limit * 1e3, "mm"
+    if unit in ("m", "rad"):   # a position: mm, or deg for a rotary load
+        scale, shown_unit = error_unit(unit == "rad")
+        shown_need, shown_lim, unit = need * scale, lim.limit * scale, shown_unit
     unit = "" if unit == "-" else f" {unit}"
     return f"{name} needs {shown_need:.4g}{unit}, limit {shown_lim:.4g}{unit}{over}"
 

@@ -20,6 +20,7 @@ import casadi as ca
 import numpy as np
 
 from ..transcription.collocation import Mesh
+from ...io.load_units import error_unit
 from .diagnose import diagnose
 from .fine_grid import drive_checks_fine, fine_grid_report
 from ..transcription.free import free_values
@@ -76,7 +77,7 @@ class Outcome:
         if self.handover is not None:
             return self.handover
         return [(name, float(value) if isinstance(value, (int, float)) else float(self.nlp.value(value, self.x).item()))
-                for name, value in self.nlp.graph.handover_terms]
+                for name, value in self.nlp.graph.terms.handover.terms]
 
 
 def objective_value(nlp: Nlp, sol, x) -> float:
@@ -100,11 +101,12 @@ def pins_in_place(nlp: Nlp, x: np.ndarray, new: dict) -> bool:
            for key in new):
         return True
     moved = replace(req, pin_times=new)
-    if not pins_fit(nlp.graph.pins, pin_intervals(moved), req.mesh) or nlp.graph.pin_values is None:
+    terms = nlp.graph.terms
+    if not pins_fit(nlp.graph.pins, pin_intervals(moved), req.mesh) or terms.pin_values is None:
         return False
-    expr = nlp.graph.pin_values
-    peak_held = req.objective == "min_peak_torque" and nlp.graph.pin_share is not None
-    share = nlp.graph.pin_share if peak_held else ca.MX(0.0)  # only min_peak_torque holds a peak at a pin
+    expr = terms.pin_values
+    peak_held = req.objective == "min_peak_torque" and terms.pin_share is not None
+    share = terms.pin_share if peak_held else ca.MX(0.0)  # only min_peak_torque holds a peak at a pin
     at = ca.Function("pins", [ca.vertcat(*nlp.built.w), ca.vertcat(*nlp.built.p)], [expr, share])
     before, share_before = (np.asarray(v).ravel() for v in at(x, nlp.numbers.p))
     after, share_after = (np.asarray(v).ravel() for v in at(x, nlp.built.numbers(moved).p))
@@ -117,7 +119,7 @@ def handover_at(nlp: Nlp, x: np.ndarray, sols: list) -> tuple[float, float, list
     """The handover error at the solution ``x`` (its move solutions ``sols``): exact (the terms' numbers taken
     with the solution as the start, where a linearised term is exact), as the solve's own numbers read it,
     and each term's exact value ((name, error [m]); None without terms)."""
-    total = nlp.graph.handover_total
+    total = nlp.graph.terms.handover.total
     if not isinstance(total, (ca.MX, ca.SX)):
         return float(total), float(total), None
     linear = float(nlp.value(total, x).item())
@@ -125,8 +127,8 @@ def handover_at(nlp: Nlp, x: np.ndarray, sols: list) -> tuple[float, float, list
     if at.built.n_w != nlp.built.n_w:  # not the same structure: the solve's own reading
         return linear, linear, None
     values = [(name, float(at.value(v, x).item()) if isinstance(v, (ca.MX, ca.SX)) else float(v))
-              for name, v in at.graph.handover_terms]
-    return float(at.value(at.graph.handover_total, x).item()), linear, values
+              for name, v in at.graph.terms.handover.terms]
+    return float(at.value(at.graph.terms.handover.total, x).item()), linear, values
 
 
 def solution_request(nlp: Nlp, x: np.ndarray) -> SolveRequest:
@@ -222,8 +224,9 @@ def _accuracy_unreachable(req: SolveRequest, nlp: Nlp, error: float) -> Accuracy
     """The error of a most accurate stroke (``min_handover_error``) whose error still breaks the accuracy."""
     settings, choice = req.settings, req.choice
     motor = f" for motor {choice.motor.name}" if choice is not None and choice.motor is not None else ""
-    short = (f"handover accuracy needs {error * 1e3:.4g} mm (the most accurate stroke), limit "
-             f"{settings.accuracy * 1e3:.4g} mm ({100 * (error / settings.accuracy - 1):.1f} % over)")
+    scale, unit = error_unit(req.problem.timing.rotary)
+    short = (f"handover accuracy needs {error * scale:.4g} {unit} (the most accurate stroke), limit "
+             f"{settings.accuracy * scale:.4g} {unit} ({100 * (error / settings.accuracy - 1):.1f} % over)")
     return AccuracyUnreachable(f"the design cannot meet the limits{motor} at {nlp.request.spm:g} spm: {short}",
                                error / settings.accuracy - 1, short, error)
 

@@ -38,7 +38,7 @@ RELAX = 1e5
 class KeepClosed(Limit):
     """The force of each ``keep_closed`` contact at least ``min_contact_force_N`` while the cluster holds."""
 
-    def on_cycle(self, g):
+    def on_cycle(self, g, terms):
         req = g.request
         cd = req.contact
         if cd is None or not cd.settings.keep_closed:
@@ -98,11 +98,11 @@ class KeepClosed(Limit):
 class ImpactVelocity(Limit):
     """The driven body's speed where the cluster meets the impact contact within ``impact_velocity_max_m_s``."""
 
-    def on_cycle(self, g):
+    def on_cycle(self, g, terms):
         req = g.request
         cd = req.contact
         if cd is None or cd.settings.impact_velocity_max is None or cd.impact_position is None:
-            return
+            return None
         vmax, pos = cd.settings.impact_velocity_max, cd.impact_position
         values = []
         for k, pos_, first in g.pins:
@@ -115,8 +115,7 @@ class ImpactVelocity(Limit):
                              lambda sig: vmax * (1 + sig), mv.index, "impact velocity")
             g.built.limit_abs(lim, weight * v / vmax)
             values.append(weight * v / vmax)
-        if values:  # the pins move with the solution: refine.pins_in_place compares these too
-            g.pin_values = ca.vertcat(*([g.pin_values] if g.pin_values is not None else []), *values)
+        return {"pin_values": values}  # the pins move with the solution: refine.pins_in_place compares these too
 
     def report(self, nlp, outcome):
         req = nlp.request

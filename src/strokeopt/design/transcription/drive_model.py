@@ -87,22 +87,11 @@ class DriveModel:
     pin_values: list = field(default_factory=list)  # pinned torques and forces relative to their limits
     pin_forces: list = field(default_factory=list)
     pin_torques: list = field(default_factory=list)  # pinned torques [tau_ref] (refine.pins_in_place)
-    sum_sq: Any = 0.0  # integral of (torque/tau_ref)^2 over the moves, divided by the period
-    dwell_sq: Any = 0.0
+    dwell_sq: Any = 0.0  # (torque/tau_ref)^2 of the dwells, each times its share of the cycle
     torques: list = field(default_factory=list)  # each move's torque at its hull points and pins [tau_ref]
     dwell_torques: list = field(default_factory=list)  # each dwell's torque at rest [tau_ref]
     pick: Any = None  # the Bonmin motor weights
     discrete: tuple | None = None  # (variable name, size) of the integer variables
-
-    @property
-    def move_sq(self):
-        """Integral of (torque/tau_ref)^2 over the moves, over the period (min_energy)."""
-        return self.sum_sq
-
-    @property
-    def mean_sq(self):
-        """(RMS torque / tau_ref)^2 over the cycle, dwells included (min_rms_torque, the RMS limit)."""
-        return self.sum_sq + self.dwell_sq
 
     @classmethod
     def build(cls, g) -> "DriveModel":

@@ -4,8 +4,10 @@ Each :class:`Limit` owns its NLP rows (:meth:`Limit.on_move`, :meth:`Limit.on_cy
 :class:`LimitGroup` s whose ``need`` and ``what`` make the message of :mod:`.diagnose`), the names of
 the drive package's checks that re-read it on the fine grid (:attr:`Limit.checks`: a violation there beyond
 ``check_tolerance`` refines the mesh, see :mod:`.refine`) and its own rows of the checks table
-(:meth:`Limit.report`). A new limit is one new builder in :data:`MOVE_LIMITS` or
-:data:`DRIVE_LIMITS`. Built by :mod:`.nlp`; the drive's symbols they read come from
+(:meth:`Limit.report`). A builder writes nothing on the graph: what it adds beside its rows for others (the
+objectives, the search) it returns as named terms, as an objective returns its ``Cost``, and
+:func:`collect` gathers them (:class:`Terms`, one place). A new limit is one new builder in
+:data:`MOVE_LIMITS` or :data:`DRIVE_LIMITS`. Built by :mod:`.nlp`; the drive's symbols they read come from
 :mod:`.drive_model`.
 """
 
@@ -19,6 +21,7 @@ import casadi as ca
 import numpy as np
 
 from .drive_model import DriveModel
+from ...io.load_units import error_unit
 
 
 @dataclass(frozen=True)
@@ -51,17 +54,57 @@ class LimitGroup:
         return bool(self.enforced(req) if callable(self.enforced) else self.enforced)
 
 
+@dataclass(frozen=True)
+class HandoverError:
+    """What :class:`HandoverAccuracy` adds for the objectives and the search: each term's largest error
+    ``(name, expression [m])``, their ``total``, and the summed ``signed`` error and ``bound`` at the checked
+    instants (the rows ``min_handover_error`` minimises); numbers 0 without a term."""
+
+    terms: tuple = ()
+    total: Any = 0.0
+    signed: Any = 0.0
+    bound: Any = 0.0
+
+
+@dataclass(frozen=True)
+class Terms:
+    """The named terms the limit builders return, gathered once (:func:`collect`): ``move_sq`` the integral of
+    (torque / tau_ref)^2 over the moves over the period (:class:`RmsTorque`; None when nothing builds it),
+    ``mean_sq`` the same with the dwells (the RMS torque squared), ``pin_values`` the pinned points' torques,
+    forces and speeds relative to their limits (None: no pin), ``pin_share`` the largest pinned torque over
+    the cycle's largest, ``handover`` (:class:`HandoverError`)."""
+
+    move_sq: Any = None
+    mean_sq: Any = None
+    pin_values: Any = None
+    pin_share: Any = None
+    handover: HandoverError = HandoverError()
+
+
+def collect(terms: dict, new: dict | None) -> dict:
+    """``terms`` with a builder's returned ``new`` added: lists are joined, other values summed (a term of
+    every move adds up over the moves)."""
+    for key, value in (new or {}).items():
+        if isinstance(value, list):
+            terms[key] = terms.get(key, []) + value
+        else:
+            terms[key] = terms[key] + value if key in terms else value
+    return terms
+
+
 class Limit:
     """One kind of limit (see the module docstring); the base adds nothing."""
 
     #: the drive package's checks (fine grid, whole cycle) that hold this limit
     checks: tuple[str, ...] = ()
 
-    def on_move(self, g, k: int) -> None:
-        """Rows of move ``k`` (``g``: the :class:`~.nlp.Graph` under construction)."""
+    def on_move(self, g, k: int) -> dict | None:
+        """Rows of move ``k`` (``g``: the :class:`~.nlp.Graph` under construction); returns the named terms it
+        adds beside its rows (summed over the moves by :func:`collect`), or None."""
 
-    def on_cycle(self, g) -> None:
-        """Rows over the whole cycle, after every move."""
+    def on_cycle(self, g, terms: dict) -> dict | None:
+        """Rows over the whole cycle, after every move (``terms``: what the builders returned so far); returns
+        its own named terms, or None."""
 
     def report(self, nlp, outcome) -> list[dict]:
         """Rows of the checks table besides the drive package's (name, value, limit, unit)."""
@@ -107,7 +150,7 @@ class PeakTorque(Limit):
                          lambda sig, pl=dm.peak_num, tr=dm.tau_ref: pl + sig * tr, mv.index, "peak_torque")
         g.built.limit_abs(lim, dm.torques[k] * (dm.tau_ref / dm.peak_lim))
 
-    def on_cycle(self, g):
+    def on_cycle(self, g, terms):
         dm = g.drive_model
         if dm.dwell_torques and not dm.stepper:
             tau_d = ca.vertcat(*dm.dwell_torques)
@@ -160,7 +203,7 @@ class PullOut(Limit):
                              f"({100 * (need - pl) / pl:.1f} % of the standstill value {pl:.4g} N m)"))
         g.built.limit(lim, ca.vertcat(ca.vec(tau - avail), ca.vec(-tau - avail)) / dm.tau_ref)
 
-    def on_cycle(self, g):
+    def on_cycle(self, g, terms):
         dm = g.drive_model
         if dm.stepper and dm.dwell_torques:  # holding at rest: the curve at standstill
             tau_d = ca.vertcat(*dm.dwell_torques) * (dm.tau_ref / dm.peak_lim)
@@ -190,16 +233,19 @@ class RmsTorque(Limit):
         per_interval = ca.mtimes(tq**2, ca.DM(w_q)) * (mesh.h * g.T[k] / dm.period)
         Q = b.var(f"torque2 move {mv.index}", (mesh.intervals + 1, 1), -np.inf, np.inf, 0.0)
         b.constrain(f"torque2 move {mv.index}", ca.vertcat(Q[0], Q[1:] - Q[:-1] - per_interval), 0.0, 0.0)
-        dm.sum_sq = dm.sum_sq + Q[-1]
+        return {"move_sq": Q[-1]}
 
-    def on_cycle(self, g):
+    def on_cycle(self, g, terms):
         dm = g.drive_model
-        if dm.rated is None:  # a stepper: no rated torque to hold (its current does not follow the load)
-            return
-        lim = LimitGroup("RMS torque", f"rms_torque (RMS torque, {dm.motor_name}: rated torque)", dm.rated_num,
-                         "N m", lambda sig, r=dm.rated_num, tr=dm.tau_ref: math.sqrt(r**2 + sig * tr**2), None,
-                         "rms_torque")
-        g.built.limit(lim, dm.mean_sq - (dm.rated / dm.tau_ref) ** 2)
+        if "move_sq" not in terms:  # a stepper that no objective asks it of
+            return None
+        mean_sq = terms["move_sq"] + dm.dwell_sq   # the RMS torque squared over the cycle, dwells included
+        if dm.rated is not None:  # a stepper: no rated torque to hold (its current does not follow the load)
+            lim = LimitGroup("RMS torque", f"rms_torque (RMS torque, {dm.motor_name}: rated torque)", dm.rated_num,
+                             "N m", lambda sig, r=dm.rated_num, tr=dm.tau_ref: math.sqrt(r**2 + sig * tr**2), None,
+                             "rms_torque")
+            g.built.limit(lim, mean_sq - (dm.rated / dm.tau_ref) ** 2)
+        return {"mean_sq": mean_sq}
 
 
 #: the objectives that read the integral of torque squared (:class:`RmsTorque`)
@@ -211,30 +257,30 @@ class BeltTension(Limit):
 
     checks = ("belt_width", "belt_breaking")
 
-    def on_cycle(self, g):
+    def on_cycle(self, g, terms):
         dm, req = g.drive_model, g.request
         belt = req.drive.belt_limit(req.choice.belt_grooves)
         if belt is None:
-            return
+            return None
         # the tension the belt checks allow; said in the units of the check that binds (the drive package's names)
         check, f_allow, belt_lim, belt_unit = belt
         f_lim = g.built.param("belt force limit", lambda r: r.drive.belt_limit(r.choice.belt_grooves)[1])
         allf = ca.horzcat(*[ca.reshape(f, 1, -1) for f in dm.forces]) / f_lim
-        dm.pin_values += [f / f_lim for f in dm.pin_forces]
         what = {"belt_width": "belt_width (width factor the belt tension requires)",
                 "belt_breaking": "belt_breaking (belt tension with safety factor, against the breaking load)"}[check]
         lim = LimitGroup("belt tension", what, belt_lim, belt_unit, lambda sig, bl=belt_lim: bl * (1 + sig), None,
                          check)
         g.built.limit_abs(lim, allf)
+        return {"pin_values": [f / f_lim for f in dm.pin_forces]}  # the pins' belt forces (refine.pins_in_place)
 
 
 class InertiaRatio(Limit):
     """Load/rotor inertia ratio: a constraint only when the radius is free (a chosen pulley is checked, not held)."""
 
-    def on_cycle(self, g):
+    def on_cycle(self, g, terms):
         dm, req = g.drive_model, g.request
         if req.choice.candidates or dm.radius is None:  # nothing to choose: the ratio is checked, not held
-            return
+            return None
         limits = req.drive.limits
         reflected = dm.inertia + req.drive.load.moving_mass * dm.radius**2
         lim = LimitGroup("inertia ratio", "inertia_ratio (load/rotor inertia ratio)", limits.max_inertia_ratio,
@@ -251,22 +297,25 @@ class HandoverAccuracy(Limit):
     it at the solution, and only if it is violated re-solves with it (``enforce_accuracy``).
     """
 
-    def on_cycle(self, g):
+    def on_cycle(self, g, terms):
         req = g.request
         terms = [(t.name, e) for t in req.error_terms for e in [t.expression(g)] if e is not None]
-        g.handover_terms = [(name, _largest(e.signed, e.bound)) for name, e in terms]
-        signed = sum(e.signed for _, e in terms) if terms else 0.0
-        bound = sum(e.bound for _, e in terms) if terms else 0.0
-        g.handover_total = _largest(signed, bound) if terms else 0.0
-        g.handover_signed, g.handover_bound = signed, bound  # the rows min_handover_error minimises
-        if terms and isinstance(signed, (ca.MX, ca.SX)) and req.enforce_accuracy:
+        if not terms:
+            return None
+        signed = sum(e.signed for _, e in terms)
+        bound = sum(e.bound for _, e in terms)
+        if isinstance(signed, (ca.MX, ca.SX)) and req.enforce_accuracy:
             acc = req.settings.accuracy
-            lim = LimitGroup("handover accuracy", "handover accuracy", acc, "m", lambda sig, ac=acc: ac * (1 + sig))
+            lim = LimitGroup("handover accuracy", "handover accuracy", acc, "rad" if req.problem.timing.rotary else "m",
+                             lambda sig, ac=acc: ac * (1 + sig))
             g.built.limit(lim, ca.vertcat(signed + bound, bound - signed) / acc - 1.0)
+        return {"handover": HandoverError(tuple((name, _largest(e.signed, e.bound)) for name, e in terms),
+                                          _largest(signed, bound), signed, bound)}
 
     def report(self, nlp, outcome):
-        return [{"name": f"handover accuracy ({name})", "value": value * 1e3,
-                 "limit": nlp.request.settings.accuracy * 1e3, "unit": "mm"}
+        scale, unit = error_unit(nlp.request.problem.timing.rotary)   # mm, or deg for a rotary load
+        return [{"name": f"handover accuracy ({name})", "value": value * scale,
+                 "limit": nlp.request.settings.accuracy * scale, "unit": unit}
                 for name, value in outcome.handover_values()]
 
 
@@ -295,17 +344,28 @@ def enforced_checks(settings, stepper: bool) -> frozenset:
     return ENFORCED_CHECKS - PULL_OUT_CHECKS
 
 
-def build_drive(g) -> None:
-    """The drive's symbols (:class:`DriveModel`) and every drive limit, move by move then over the cycle."""
+def build_drive(g) -> dict:
+    """The drive's symbols (:class:`DriveModel`, ``g.drive_model``) and every drive limit, move by move then over
+    the cycle; returns the terms they return (:func:`collect`) with the pinned torques' (``pin_values``,
+    ``pin_share``)."""
     dm = g.drive_model = DriveModel.build(g)
+    terms: dict = {}
     for k in range(len(g.request.moves)):
         dm.move(g, k)
         for lim in DRIVE_LIMITS:
-            lim.on_move(g, k)
+            collect(terms, lim.on_move(g, k))
     dm.dwells(g)
     for lim in DRIVE_LIMITS:
-        lim.on_cycle(g)
-    g.pin_values = ca.vertcat(*dm.pin_values) if dm.pin_values else None
+        collect(terms, lim.on_cycle(g, terms))
+    collect(terms, {"pin_values": list(dm.pin_values)})
     if dm.pin_torques:  # the largest pinned torque over the largest torque of the cycle (refine.pins_in_place)
         peak = ca.mmax(ca.fabs(ca.vertcat(*[ca.vec(t) for t in dm.torques + dm.dwell_torques])))
-        g.pin_share = ca.mmax(ca.fabs(ca.vertcat(*dm.pin_torques))) / ca.fmax(peak, 1e-12)
+        terms["pin_share"] = ca.mmax(ca.fabs(ca.vertcat(*dm.pin_torques))) / ca.fmax(peak, 1e-12)
+    return terms
+
+
+def gathered(terms: dict) -> Terms:
+    """The :class:`Terms` of the builders' returned ``terms`` (the pins' values stacked)."""
+    pins = terms.get("pin_values") or []
+    return Terms(terms.get("move_sq"), terms.get("mean_sq"), ca.vertcat(*pins) if pins else None,
+                 terms.get("pin_share"), terms.get("handover", HandoverError()))

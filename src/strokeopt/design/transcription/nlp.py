@@ -21,7 +21,7 @@ import numpy as np
 from .collocation import MoveSolution, MoveVariables
 from .contact_limits import CONTACT_LIMITS
 from .free import build_free
-from .limits import MOVE_LIMITS, LimitGroup, build_drive
+from .limits import MOVE_LIMITS, LimitGroup, Terms, build_drive, collect, gathered
 from .objectives import TIME_SCALE, TIME_SCALE_BOUNDS, build_objective, free_time
 from .pins import initial_pin_times, pin_intervals, pin_windows, pins_fit
 from .request import SolveRequest, initial_unit
@@ -164,17 +164,14 @@ class Graph:
     f: Any = None  # the expression the solver minimises (the cost's, or the relaxed build's slack sum)
     cost: Any = None  # the objective's Cost (objectives.py): its measure, unit and transform to SI
     solvers: dict = field(default_factory=dict)
-    # the drive (see limits.build_drive): its radius, motor, torques and their squares are the DriveModel's
+    # the drive (see limits.build_drive): its radius, motor and torques are the DriveModel's
     drive_model: Any = None
-    pin_values: Any = None  # the pinned points' torques and forces, relative to their limits
-    pin_share: Any = None  # the largest pinned torque over the largest torque of the cycle
+    #: what the limit builders return beside their rows, gathered once (limits.Terms: the torque squared, the
+    #: pinned points, the handover error)
+    terms: Terms = Terms()
     pin_motions: dict = field(default_factory=dict)  # (move, position) -> (weight, v, a) at the pin (pins.pin_motion)
     load: Any = None  # the drive's load, with the free model parameters in it (free.build_free)
     free_stiffness: dict = field(default_factory=dict)  # element name -> stiffness symbol (free.build_free)
-    handover_terms: list = field(default_factory=list)  # (name, error expression [m])
-    handover_total: Any = 0.0
-    handover_signed: Any = 0.0  # the summed signed error at each instant [m] (limits.HandoverAccuracy)
-    handover_bound: Any = 0.0  # the bound added at each instant [m] (an encoder count)
 
     @property
     def problem(self):
@@ -231,10 +228,10 @@ def build_graph(req: SolveRequest, pins: tuple) -> Graph:
     g = Graph(req, Built(relaxed=req.relaxed), pins)
     add_moves(g)
     build_free(g)
-    if req.drive is not None:
-        build_drive(g)
+    terms = build_drive(g) if req.drive is not None else {}
     for lim in CONTACT_LIMITS:
-        lim.on_cycle(g)
+        collect(terms, lim.on_cycle(g, terms))
+    g.terms = gathered(terms)
     g.cost = build_objective(g)
     f = g.cost.f
     if g.built.relaxed:

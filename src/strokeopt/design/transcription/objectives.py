@@ -17,6 +17,7 @@ import casadi as ca
 import numpy as np
 
 from ...errors import ProblemError
+from ...io.load_units import error_unit
 
 #: Weight of the jerk-squared regularisation added to epigraph (peak) objectives.
 SMOOTHING = 1e-7
@@ -95,12 +96,12 @@ def min_peak_torque(g):
 
 def min_rms_torque(g):
     tau_ref = g.drive_model.tau_ref
-    return Cost(g.drive_model.mean_sq, "N m", lambda f, r: math.sqrt(max(f, 0.0)) * tau_ref)
+    return Cost(g.terms.mean_sq, "N m", lambda f, r: math.sqrt(max(f, 0.0)) * tau_ref)
 
 
 def min_energy(g):
     tau_ref = g.drive_model.tau_ref
-    return Cost(g.drive_model.move_sq, "N^2 m^2 s", lambda f, r: f * tau_ref**2 * r.period)
+    return Cost(g.terms.move_sq, "N^2 m^2 s", lambda f, r: f * tau_ref**2 * r.period)
 
 
 def min_time(g):
@@ -114,7 +115,7 @@ def min_time(g):
 def min_handover_error(g):
     """The most accurate stroke at this rate: the largest handover error of the design's terms over the checked
     instants (:class:`~.limits.HandoverAccuracy`, epigraph form), relative to ``[design] handover_accuracy_mm``."""
-    signed, bound = g.handover_signed, g.handover_bound
+    signed, bound = g.terms.handover.signed, g.terms.handover.bound
     if not isinstance(signed, (ca.MX, ca.SX)):
         raise ProblemError(str(g.problem.file), "design.objective",
                            "min_handover_error needs a handover error term: a [servo] section (the servo loop and "
@@ -123,7 +124,8 @@ def min_handover_error(g):
     z = b.var("handover error", (1, 1), 0.0, np.inf, 1.0)
     b.constrain("handover error epigraph", ca.vertcat(z - (signed + bound) / scale, z - (bound - signed) / scale),
                 0.0, np.inf)
-    return Cost(z + _smoothing(g), "mm", lambda f, r: f * scale * 1e3, z)
+    shown, unit = error_unit(g.problem.timing.rotary)   # mm, or deg for a rotary load
+    return Cost(z + _smoothing(g), unit, lambda f, r: f * scale * shown, z)
 
 
 def min_stiffness(g):

@@ -7,6 +7,7 @@ section's :class:`~strokeopt.io.fields.Fields`; unknown keys are errors.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from ...drive.transmission import TEETH_RANGE
@@ -99,8 +100,28 @@ class DesignSettings:
 ACCURACY_RANGE_MM = (1e-4, 100.0)
 
 
-def parse_design(f, *, file: str = "") -> DesignSettings:
-    """Read the ``[design]`` table with the :class:`~strokeopt.problem.Fields` reader (unknown keys are errors)."""
+#: Handover accuracies of a rotary load [deg]: 0.1 arcsec (an encoder count of a fine direct drive) to 10 deg.
+ACCURACY_RANGE_DEG = (3e-5, 10.0)
+
+
+def _read_accuracy(f, rotary: bool) -> float:
+    """The handover accuracy [m, or rad for a rotary load]: ``handover_accuracy_mm`` (default 0.5 mm, digest A.1)
+    or, where the load turns, ``handover_accuracy_deg`` (default 0.05 deg: an estimate, a sley's 0.26 mm at its
+    293.8 mm reed, of the order of the needle bar's 0.5 mm)."""
+    key, other = ("handover_accuracy_deg", "handover_accuracy_mm") if rotary else \
+        ("handover_accuracy_mm", "handover_accuracy_deg")
+    if f.has(other):
+        raise f.error(other, f"the load {'turns' if rotary else 'translates'} ([timing] in "
+                             f"{'deg' if rotary else 'mm'}): state its accuracy as {key}")
+    if rotary:
+        return math.radians(f.number(key, 0.05, min=ACCURACY_RANGE_DEG[0], max=ACCURACY_RANGE_DEG[1]))
+    # 0.1 um (an encoder count of a fine drive) to 100 mm (no constraint on any textile mechanism)
+    return f.number(key, 0.5, min=ACCURACY_RANGE_MM[0], max=ACCURACY_RANGE_MM[1]) * 1e-3
+
+
+def parse_design(f, *, file: str = "", rotary: bool = False) -> DesignSettings:
+    """Read the ``[design]`` table with the :class:`~strokeopt.problem.Fields` reader (unknown keys are errors);
+    ``rotary``: the load turns ([timing] in deg), so its handover accuracy is ``handover_accuracy_deg``."""
     if f is None:
         return DesignSettings()
     objective = f.string("objective", "min_peak_torque", choices=tuple(OBJECTIVES))
@@ -126,8 +147,7 @@ def parse_design(f, *, file: str = "") -> DesignSettings:
         raise f.error("collocation_degree", "rest_order = 3 (jerk continuous) needs collocation_degree >= 2")
     if objective == "min_snap" and d < 2:
         raise f.error("collocation_degree", "min_snap needs collocation_degree >= 2 (snap of the acceleration polynomial)")
-    # 0.1 um (an encoder count of a fine drive) to 100 mm (no constraint on any textile mechanism)
-    accuracy = f.number("handover_accuracy_mm", 0.5, min=ACCURACY_RANGE_MM[0], max=ACCURACY_RANGE_MM[1]) * 1e-3
+    accuracy = _read_accuracy(f, rotary)
     motor_choice = f.string("motor_choice", "fixed", choices=MOTOR_CHOICES)
     pulley = f.string("pulley", "fixed", choices=PULLEY_CHOICES)
     zmin = f.number("pulley_teeth_min", None, integer=True, min=TEETH_RANGE[0], max=TEETH_RANGE[1])  # see
