@@ -7,7 +7,7 @@ Last step of the design's flow (:mod:`.solve` makes them). Files: :mod:`strokeop
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -99,12 +99,10 @@ class Design:
     checks: list[dict] = field(default_factory=list)
     active_constraints: list[str] = field(default_factory=list)
     fine_grid: dict = field(default_factory=dict)
-    pulley_teeth: int | None = None
-    pitch_diameter: float | None = None
-    motor: str | None = None
     notes: list[str] = field(default_factory=list)
     #: the resolved drive (drive/selection.py): motor, transmission with its pulley, belt, limits -- the
-    #: catalogue entries the design was solved with, handed on (nothing looks them up by name again)
+    #: catalogue entries the design was solved with, handed on (nothing looks them up by name again); the
+    #: design's motor, pulley and pitch diameter are its (None without a [drive])
     drive: Any = field(default=None, repr=False)
     settings: Any = field(default=None, repr=False)  # the DesignSettings it was solved with
     #: the handover accuracy was held in its solve (a min_time warm-started from it holds it from the start)
@@ -122,6 +120,22 @@ class Design:
         if self.pulley_teeth:
             parts.append(f"pulley {self.pulley_teeth} teeth")
         return f"Design({self.status}: {', '.join(parts)})"
+
+    @property
+    def motor(self) -> str | None:
+        """The name of the design's motor (its resolved drive's)."""
+        return None if self.drive is None else self.drive.motor
+
+    @property
+    def pulley_teeth(self) -> int | None:
+        """The tooth count of the design's pulley; None for a continuous radius or another transmission."""
+        return None if self.drive is None else self.drive.pulley_teeth
+
+    @property
+    def pitch_diameter(self) -> float | None:
+        """The pitch diameter [m] of the design's pulley (a catalogue pulley's or the continuous one)."""
+        radius = None if self.drive is None else self.drive.radius
+        return None if radius is None else 2 * radius
 
     @property
     def motor_spec(self):
@@ -219,17 +233,14 @@ def design_from_data(problem, data: dict, stroke: StrokeFunction) -> Design:
                                 m["start_position_mm"] * 1e-3, sign * m["stroke_mm"] * 1e-3, solution,
                                 m["v_max_m_s"], m["a_max_m_s2"], m["jerk_max_m_s3"], m["C_a"]))
     pd = data.get("pulley_pitch_diameter_mm")
-    design = Design(problem, float(data["spm"]), data["objective"], data["objective_value"], data["objective_unit"],
-                    stroke, moves, mesh, data["status"], data["solve_time_s"], data.get("iterations", 0),
-                    checks=list(data.get("checks", [])), active_constraints=list(data.get("active_constraints", [])),
-                    fine_grid=dict(data.get("fine_grid", {})), pulley_teeth=data.get("pulley_teeth"),
-                    pitch_diameter=None if pd is None else pd * 1e-3, motor=data.get("motor"),
-                    notes=list(data.get("notes", [])))
     settings = getattr(problem, "design", None)
-    if design.motor is None or getattr(problem, "drive", None) is None:
-        return replace(design, settings=settings)
-    # the file's names, resolved once
-    drive = resolve_drive(problem, motor=design.motor, pulley_teeth=design.pulley_teeth,
-                          pitch_diameter=design.pitch_diameter,
-                          include_pulley_inertia=getattr(settings, "include_pulley_inertia", True))
-    return replace(design, settings=settings, drive=drive)
+    drive = None
+    if data.get("motor") is not None and getattr(problem, "drive", None) is not None:  # the file's names, resolved once
+        drive = resolve_drive(problem, motor=data["motor"], pulley_teeth=data.get("pulley_teeth"),
+                              pitch_diameter=None if pd is None else pd * 1e-3,
+                              include_pulley_inertia=getattr(settings, "include_pulley_inertia", True))
+    return Design(problem, float(data["spm"]), data["objective"], data["objective_value"], data["objective_unit"],
+                  stroke, moves, mesh, data["status"], data["solve_time_s"], data.get("iterations", 0),
+                  checks=list(data.get("checks", [])), active_constraints=list(data.get("active_constraints", [])),
+                  fine_grid=dict(data.get("fine_grid", {})), notes=list(data.get("notes", [])), drive=drive,
+                  settings=settings)

@@ -100,7 +100,6 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
     checks, active = _report_checks(best)
     design = Design(problem, spm, req.objective, best.value, nlp.graph.cost.unit, stroke, moves, nlp.request.mesh,
                     best.status, wall, best.iterations, checks=checks, active_constraints=active, fine_grid=best.fine,
-                    pulley_teeth=teeth, pitch_diameter=pd, motor=None if motor is None else motor.name,
                     notes=notes + _settings_notes(settings, free, nlp, drive), drive=resolved, settings=settings,
                     accuracy_enforced=bool(nlp.request.enforce_accuracy and terms), free_parameters=free)
     if handover_check is not None and any(c["name"].startswith(HANDOVER_CHECK) for c in checks):
