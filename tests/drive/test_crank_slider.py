@@ -59,7 +59,7 @@ def test_registry_reads_every_type_the_problem_reader_offers():
 def test_the_crank_file_is_the_reference_with_a_crank():
     crank, belt = load_problem(CRANK_FILE), load_problem(PROBLEMS / "deco2000_needle_bar.toml")
     tr = crank.transmission
-    assert isinstance(tr, CrankSlider) and (tr.r, tr.l, tr.dead_centre, tr.sense) == pytest.approx((0.018, 0.08, -3e-4, 1.0))
+    assert isinstance(tr, CrankSlider) and (tr.r, tr.l, tr.dead_centre, tr.sense) == pytest.approx((0.020, 0.08, -3e-4, 1.0))
     assert tr.inertia == pytest.approx(0.43e-4)
     assert crank.timing == belt.timing and crank.data["model"] == belt.data["model"]   # extends the reference
     assert crank.servo is None and crank.error_terms == ()                             # omit = ["servo", ...]
@@ -70,6 +70,7 @@ def test_the_crank_file_is_the_reference_with_a_crank():
 @pytest.mark.parametrize("override, field, words", [
     ("transmission.rod_length_mm=15", "transmission.rod_length_mm", "longer than the crank radius"),
     ("transmission.crank_radius_mm=17", "transmission.dead_centre_mm", "outside"),       # 34 mm < 35 mm of travel
+    ("transmission.crank_radius_mm=17.6", "transmission.dead_centre_mm", "outside"),     # 35.2 mm less the margins
     ("transmission.dead_centre_mm=1.0", "transmission.dead_centre_mm", "the position 0 mm is outside"),
     ('transmission.direction="down"', "transmission.dead_centre_mm", "outside"),
     ("transmission.crank_radius_mm=0", "transmission.crank_radius_mm", "plausible range"),
