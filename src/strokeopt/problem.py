@@ -132,7 +132,7 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
     scenes = parse_scenes(top.table("scenes", required=False), model)
     drive_table = top.table("drive", required=False)
     drive = parse_drive(drive_table, (path or Path(file)).parent, model, _model_reference(model, timing),
-                        rotary=timing.rotary) if drive_table is not None else None
+                        rotary=timing.rotary, transmission=transmission) if drive_table is not None else None
     if model is not None and model.transmission is not None and timing.intervals[0].start_position != 0:
         raise ProblemError(file, "timing.start_position_mm", "a model on the transmission's members starts at the "
                                                              "transmission's zero: start_position_mm must be 0")

@@ -69,10 +69,13 @@ def test_the_crank_file_is_the_reference_with_a_crank():
 
 @pytest.mark.parametrize("override, field, words", [
     ("transmission.rod_length_mm=15", "transmission.rod_length_mm", "longer than the crank radius"),
-    ("transmission.crank_radius_mm=17", "transmission.dead_centre_mm", "outside"),       # 34 mm < 35 mm of travel
-    ("transmission.crank_radius_mm=17.6", "transmission.dead_centre_mm", "outside"),     # 35.2 mm less the margins
+    # the travel refused naming the field the user set among those that place it (else the dead centre)
+    ("transmission.crank_radius_mm=17", "transmission.crank_radius_mm", "outside"),      # 34 mm < 35 mm of travel
+    ("transmission.crank_radius_mm=17.6", "transmission.crank_radius_mm", "outside"),    # 35.2 mm less the margins
     ("transmission.dead_centre_mm=1.0", "transmission.dead_centre_mm", "the position 0 mm is outside"),
-    ('transmission.direction="down"', "transmission.dead_centre_mm", "outside"),
+    ('transmission.direction="down"', "transmission.direction", "outside"),
+    ('drive.belt="GT3-3MR-09"', "drive.belt", "is a belt drive's"),                    # no belt to check
+    ("drive.pulley_teeth_min=20", "drive.pulley_teeth_min", "a crank and connecting rod (transmission.type), has neither"),
     ("transmission.crank_radius_mm=0", "transmission.crank_radius_mm", "plausible range"),
     ('transmission.type="gearbox"', "transmission.type", "positions and strokes in deg"),
 ])

@@ -59,7 +59,10 @@ class CrankSlider(Transmission):
         tr = cls(r, rod, fields.number("crank_inertia_kg_cm2", 0.0, min=0.0, max=1e4) * 1e-4,
                  fields.number("dead_centre_mm", min=-1e5, max=1e5) * 1e-3,
                  1.0 if fields.string("direction", choices=("up", "down")) == "up" else -1.0)
-        check_reach(tr, fields, "dead_centre_mm", timing, "move the dead centre or lengthen the crank")
+        # the field to name: one the user set (--set) among those that place the travel, else the dead centre
+        placing = ("crank_radius_mm", "rod_length_mm", "direction", "dead_centre_mm")
+        key = next((k for k in placing if fields.where(k) in fields.overridden), "dead_centre_mm")
+        check_reach(tr, fields, key, timing, "move the dead centre or lengthen the crank")
         fields.finish()
         return tr
 

@@ -53,12 +53,24 @@ class DriveSpec:
                         self.allowable_tension)
 
 
-def parse_drive(f, base_dir: Path | None = None, model=None, reference=None, rotary: bool = False) -> DriveSpec:
+#: The [drive] keys of a belt drive's pulley and belt: refused where the transmission has none.
+BELT_DRIVE_KEYS = ("belt", "belt_cord", "belt_service_factor", "pulley_profile", "pulley_teeth_min", "pulley_teeth_max")
+
+
+def parse_drive(f, base_dir: Path | None = None, model=None, reference=None, rotary: bool = False,
+                transmission=None) -> DriveSpec:
     """Read the ``[drive]`` table (a :class:`~strokeopt.io.fields.Fields`) of a problem file. ``model``: the
     contact model (``[model]``), whose springs a load force may name (``model_spring``) instead of its numbers.
     ``rotary``: the load turns (``[timing]`` in deg): its ``moving_inertia_kg_m2`` about its shaft takes the
-    place of ``moving_mass_kg`` in the same equations, its load forces are torques (N m, N m/rad, deg)."""
+    place of ``moving_mass_kg`` in the same equations, its load forces are torques (N m, N m/rad, deg).
+    ``transmission``: the problem's; one without a belt pulley refuses the keys of a belt and pulley."""
     motor = f.string("motor", None)
+    if transmission is not None and transmission.name != "belt_pulley":  # a screw, a gearbox, a crank: no belt
+        for key in BELT_DRIVE_KEYS:
+            if f.has(key):
+                raise f.error(key, f"is a belt drive's (its pulley and belt); the transmission, a {transmission.label} "
+                                   "(transmission.type), has neither: remove it, or omit it where it comes from an "
+                                   "extended file")
     if rotary:
         if f.has("moving_mass_kg"):
             raise f.error("moving_mass_kg", "the load turns ([timing] in deg): give its moving_inertia_kg_m2 about "
@@ -86,8 +98,6 @@ def parse_drive(f, base_dir: Path | None = None, model=None, reference=None, rot
     if tmax < tmin:
         raise f.error("pulley_teeth_max", f"{tmax} is below pulley_teeth_min {tmin}")
     belt = f.string("belt", None)
-    if rotary and belt is not None:
-        raise f.error("belt", "a rotary load through a gearbox has no toothed belt to check")
     cord = f.string("belt_cord", "glass", choices=BELT_CORDS)
     # belt catalogues' service factors run 1.0-2.5 (appendix 2: 1.5); a tension above 100 kN is no toothed belt
     service = f.number("belt_service_factor", 1.5, min=0.5, max=5.0)

@@ -13,6 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from ..drive.checks import cycle_values, torque_limit
+from ..drive.transmissions import transmission_label
 from ..io.cycle import cycle_of
 from .format import format_table, period_text
 from .units import direction_word
@@ -102,7 +103,8 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
         lines.append(format_table(rows, [("motor", "motor"), ("z", "z"), ("angle", "cam deg")]
                                   + [(k, k) for k in keys]))
         best = sizing.candidates[0]
-        lines.append(f"\nchecks of {best.motor.name} with z{best.pulley.teeth}:")
+        lines.append(f"\nchecks of {best.motor.name} with "
+                     + (f"z{best.pulley.teeth}:" if best.pulley.teeth is not None else f"the problem's {transmission_label(best.pulley.name)}:"))
         lines.append(format_table([c.as_dict() for c in best.checks], [("name", "check"), ("value", "value"),
                                   ("limit", "limit"), ("unit", "unit"), ("margin", "margin"), ("ok", "ok")]))
     if "continuous_radius" in report:

@@ -73,8 +73,9 @@ def accuracy_text(report: dict) -> str:
         f"  encoder quantisation  {c['encoder_quantisation']:.4f} {u}  (one count, added as a bound)",
         f"over the cycle: max error {report[f'max_error_{u}']:.4f} {u}, max servo error "
         f"{report[f'max_servo_error_{u}']:.4f} {u}, max {stretch} {report[stretch_key]:.4f} {u}; "
-        f"residual {report['compliance']} vibration in the dwell after the handover "
-        f"{report[f'residual_vibration_{u}']:.4f} {u}",
+        + (f"residual {report['compliance']} vibration in the dwell after the handover "
+           f"{report[f'residual_vibration_{u}']:.4f} {u}" if report.get("dwell_after_handover", True) else
+           "no dwell follows the handover move (no residual vibration to judge)"),
         f"peak torque command {report['peak_torque_command_N_m']:.3f} N m (torque limit "
         f"{format_value(report['torque_limit_N_m'])} N m = {report.get('torque_limit_basis', 'min(motor peak, drive peak limit x rated)')})",
         f"  {report['torque_basis']}",

@@ -85,12 +85,15 @@ class AccuracyResult:
         return 360.0 * (self.t - self.loop.settings.sum_small_time_constants) / self.period
 
     def at_handover(self, arr) -> float:
-        return float(np.interp(self.handover_time, self.t, arr))
+        """``arr`` at the end of the handover move; the response is periodic, so a handover at the cycle's end
+        (plus the loop delay: past the grid's last point) is read at the cycle's start."""
+        return float(np.interp(self.handover_time, self.t, arr, period=self.period))
 
     def _window(self) -> np.ndarray:
-        """Samples from the end of the handover move over ``handover_window_deg`` of cam angle."""
-        t1 = self.handover_time + self.loop.settings.handover_window / 360.0 * self.period
-        return (self.t >= self.handover_time) & (self.t <= t1)
+        """Samples from the end of the handover move over ``handover_window_deg`` of cam angle, continued at the
+        cycle's start where the window passes its end (a move that ends at 360 deg)."""
+        since = (self.t - self.handover_time) % self.period
+        return since <= self.loop.settings.handover_window / 360.0 * self.period
 
     def at_handover_worst(self, arr) -> float:
         """``arr`` at the instant of the largest |bar error| in the handover window (the end of the
@@ -156,6 +159,7 @@ class AccuracyResult:
             f"max_error_{u}": float(np.max(np.abs(self.error))) * scale,
             f"max_servo_error_{u}": float(np.max(np.abs(self.servo))) * scale,
             f"residual_vibration_{u}": self.residual_vibration * scale,
+            "dwell_after_handover": self.residual_window[1] > self.residual_window[0],  # else no residual to judge
             "peak_torque_command_N_m": self.peak_torque_command,
             "torque_limit_N_m": self.torque_limit,
             "torque_limited": self.torque_limited,

@@ -117,7 +117,8 @@ def _torsion_axis(problem, settings: ServoSettings, motor, catalogue) -> DriveAx
     mu = np.abs(np.ravel(tr.transfer(np.ravel(tr.motor_angle(positions)))[1]))   # the ratio over the stroke
     if not mu.max() - mu.min() <= 1e-9 * mu.max():
         raise ProblemError(file, "transmission.type", f"is {tr.name!r}: the servo model holds a constant ratio "
-                                                      f"(belt_pulley or gearbox); a {tr.label}'s changes with its position")
+                                                      f"(belt_pulley or gearbox); the ratio of a {tr.label} changes "
+                                                      "with its position")
     if motor is None:
         if drive.motor is None:
             raise ProblemError(file, "drive.motor", "name the motor of the axis (a catalogue name)")
