@@ -209,7 +209,8 @@ def draw_kinematics(axes, problem, strokes, spm: float, n: int = 3601) -> None:
         a_end = sch.end_angle_deg[move.index - 1]
         for ax in axes:
             ax.axvline(a_end, color="tab:red", ls="--", lw=1)
-        axes[0].annotate(f"handover ({move.end_position * 1e3:g} mm)", (a_end, move.end_position * 1e3),
+        _, unit, scale = units[0]   # the position axis: mm, or deg for a rotary load
+        axes[0].annotate(f"handover ({move.end_position * scale:g} {unit})", (a_end, move.end_position * scale),
                          xytext=(8, 12), textcoords="offset points", color="tab:red")
     axes[-1].set_xlabel("cam angle [deg] (360 deg = one cam cycle)")
     axes[-1].set_xlim(0, 360)
