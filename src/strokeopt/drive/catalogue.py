@@ -363,6 +363,7 @@ def load_catalogue(extra_files=(), builtin: bool = True) -> Catalogue:
             name = unique("pulley", row)
             profile = row.string("profile", choices=tuple(PROFILE_PITCH))
             teeth = row.number("teeth", integer=True, min=TEETH_RANGE[0], max=TEETH_RANGE[1])  # transmission.py
+            row.string("source", "")  # where the entry's numbers come from (a citation, or "estimate" and why)
             pd = pitch_diameter(profile, teeth)
             if row.has("inertia_kg_cm2"):
                 inertia = row.number("inertia_kg_cm2", positive=True, max=1e6) * KG_CM2
@@ -387,6 +388,7 @@ def load_catalogue(extra_files=(), builtin: bool = True) -> Catalogue:
         for row in top.tables("belt", required=False):
             name = unique("belt", row)
             profile = row.string("profile", choices=tuple(PROFILE_PITCH))
+            row.string("source", "")  # where the entry's numbers come from (a citation, or "estimate" and why)
             cat.belts[name] = Belt(
                 # belts: 1 mm to 1 m wide, breaking tensions and EA up to 1e8 N
                 name, profile, row.number("width_mm", min=1.0, max=1e3) * 1e-3,
