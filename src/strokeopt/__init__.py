@@ -66,7 +66,7 @@ from .motion.stroke import Kinematics, Piece, StrokeFunction
 from .motion.timing import Interval, TimingDiagram
 from .drive.crank_slider import CrankSlider
 from .drive.transmission import BeltPulley, Gearbox, ScrewLever, Transmission, gt3_pitch_diameter
-from .drive.transmissions import TRANSMISSIONS
+from .transmissions import TRANSMISSIONS
 
 __all__ = [
     "Body", "Element", "ForceLaw", "Model", "Scene", "SceneResult", "SimulationOptions", "make_scene",

@@ -23,7 +23,7 @@ from .design.transcription.free import check_free
 from .design.transcription.settings import parse_design
 from .drive.spec import parse_drive
 from .drive.transmission import Transmission
-from .drive.transmissions import TRANSMISSIONS
+from .transmissions import TRANSMISSIONS
 from .errors import ProblemError
 from .io.cycle import CYCLE_NOUN, STITCH, MachineCycle
 from .io.fields import _REQUIRED, Fields, apply_overrides
@@ -298,12 +298,12 @@ def _timing_unit(f: Fields, rows: list[Fields]) -> str:
 
 
 def _read_transmission(trans: Fields, timing: TimingDiagram) -> Transmission:
-    """``[transmission]``: its ``type`` (drive/transmissions.py: a belt pulley by default) reads the rest; the
+    """``[transmission]``: its ``type`` (transmissions.py: a belt pulley by default) reads the rest; the
     load it drives must be the one ``[timing]`` states (mm for a translating load, deg for a rotary one)."""
     kind = trans.string("type", next(iter(TRANSMISSIONS)), choices=tuple(TRANSMISSIONS))
     cls = TRANSMISSIONS[kind]
-    if cls.load_unit != timing.unit:
-        others = sorted(name for name, c in TRANSMISSIONS.items() if c.load_unit == timing.unit)
+    if cls.load_unit is not None and cls.load_unit != timing.unit:  # None: its own fields say (a linkage's output)
+        others = sorted(name for name, c in TRANSMISSIONS.items() if c.load_unit in (timing.unit, None))
         raise trans.error("type", f"{kind!r} drives a {'rotary' if cls.load_unit == 'rad' else 'linear'} load, but "
                                   f"[timing] states its positions in {unit_key(timing.unit)}: a {cls.label} takes "
                                   f"positions and strokes in {unit_key(cls.load_unit)} (start_position_"

@@ -50,9 +50,10 @@ def test_reach_keeps_the_crank_off_its_dead_centres():
 
 
 def test_registry_reads_every_type_the_problem_reader_offers():
-    assert list(TRANSMISSIONS) == ["belt_pulley", "screw_lever", "gearbox", "crank_slider"]
+    assert list(TRANSMISSIONS) == ["belt_pulley", "screw_lever", "gearbox", "crank_slider", "linkage"]
     for name, cls in TRANSMISSIONS.items():
-        assert cls.name == name and cls.label and cls.load_unit in ("m", "rad")
+        # a linkage's load is its output's (an angle or a length): its fields decide
+        assert cls.name == name and cls.label and cls.load_unit in (("m", "rad", None) if name == "linkage" else ("m", "rad"))
         assert cls.read.__func__ is not TRANSMISSIONS["belt_pulley"].__mro__[1].read.__func__, name
 
 

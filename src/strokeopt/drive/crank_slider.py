@@ -66,6 +66,9 @@ class CrankSlider(Transmission):
         fields.finish()
         return tr
 
+    def facts(self):
+        return [("crank radius [mm]", self.r * 1e3), ("connecting rod length [mm]", self.l * 1e3)]
+
     def travel(self, phi):
         """x [m] from the outer dead centre towards the crank shaft at the crank angle ``phi`` [rad]."""
         return self.r + self.l - self.r * ca.cos(phi) - ca.sqrt(self.l**2 - (self.r * ca.sin(phi)) ** 2)

@@ -25,7 +25,8 @@ inertia in kg m^2); ``transmission`` any :class:`~strokeopt.drive.transmission.T
 The model (rigid, one degree of freedom): with the load at ``x = f(phi)``,
 ``mu = dx/dphi``, ``nu = d2x/dphi2`` (AD, transmission.py) the force the
 transmission applies to the load is ``F = m (a - g) - sum(F_load)`` and the
-motor torque ``T = (J_rotor + J_transmission) eps + mu F``. A member between motor and load (a nut,
+motor torque ``T = (J_rotor + J_transmission) eps + mu F``; a transmission whose own inertia varies (a linkage's links) adds
+``J(phi) eps + 1/2 J'(phi) omega^2`` and the torques of its own loads (:meth:`Transmission.own_terms`). A member between motor and load (a nut,
 a lever: :class:`Member`) of inertia ``I`` on a stage ``q(phi)`` adds ``I q' (q' eps + q'' omega^2)``,
 which is ``J(phi) eps + 1/2 J'(phi) omega^2`` with ``J = I q'^2``; the load's own term is the same with
 ``I = m``, ``q = x``.
@@ -153,12 +154,16 @@ def load_torque(motor, transmission, load: Load, s, v, a) -> TorqueTerms:
     forces = {f.name: f(s) for f in load.forces}
     f_ext = sum(forces.values()) if forces else 0 * s
     rotor = rotor_inertia_of(motor) * eps
-    trans = transmission.inertia * eps
+    own = transmission.own_terms(phi, omega, eps)  # its bodies' inertia; a linkage's gravity and loads by name
+    trans = own.pop("inertia")
     inertial = m * a * mu
     gravity = -m * load.gravity * mu
     force_torques = {k: -f * mu for k, f in forces.items()}
     load_force = m * (a - load.gravity) - f_ext
     total = rotor + trans + load_force * mu
+    for name, torque in own.items():
+        force_torques[name] = torque
+        total = total + torque
     members = {}
     if load.members:  # J_i(phi) eps + 1/2 J_i'(phi) omega^2 with J_i = I_i q_i'^2: I_i q_i' (q_i' eps + q_i'' omega^2)
         stage = transmission.stage_transfer(phi)
@@ -173,9 +178,9 @@ def reflected_inertia(transmission, load: Load, phi=None) -> float:
     """Load inertia seen by the motor shaft [kg m^2]: transmission inertia + m * max(mu^2) over ``phi``."""
     phi = np.zeros(1) if phi is None else np.asarray(phi, dtype=float)
     _, mu, _ = transmission.transfer(phi)
-    j = load.moving_mass * np.asarray(mu) ** 2
+    j = load.moving_mass * np.asarray(mu) ** 2 + transmission.inertia_at(phi)
     if load.members:
         stage = transmission.stage_transfer(phi)
         j = j + sum(m.inertia * np.asarray(stage[m.stage][0]) ** 2 for m in load.members)
-    return float(transmission.inertia + np.max(j))
+    return float(np.max(j))
 

@@ -71,18 +71,22 @@ def parse_drive(f, base_dir: Path | None = None, model=None, reference=None, rot
                 raise f.error(key, f"is a belt drive's (its pulley and belt); the transmission, a {transmission.label} "
                                    "(transmission.type), has neither: remove it, or omit it where it comes from an "
                                    "extended file")
+    own_bodies = getattr(transmission, "carries_load", False)
     if rotary:
         if f.has("moving_mass_kg"):
             raise f.error("moving_mass_kg", "the load turns ([timing] in deg): give its moving_inertia_kg_m2 about "
                                             "its shaft instead")
-        # 1 g cm^2 (a small lever) to 1000 kg m^2 (a large turntable; a loom sley is 1.3 kg m^2)
-        mass = f.number("moving_inertia_kg_m2", min=1e-7, max=1e3)
+        # 1 g cm^2 (a small lever) to 1000 kg m^2 (a large turntable; a loom sley is 1.3 kg m^2); none needed where
+        # the transmission's own bodies carry the load's (a linkage's links: only what is added to its output)
+        mass = f.number("moving_inertia_kg_m2", 0.0, min=0.0, max=1e3) if own_bodies else \
+            f.number("moving_inertia_kg_m2", min=1e-7, max=1e3)
     else:
         if f.has("moving_inertia_kg_m2"):
             raise f.error("moving_inertia_kg_m2", "the load translates ([timing] in mm): give its moving_mass_kg, or "
                                                   "state [timing] in deg for a rotary load")
         # 0.1 g (a knitting machine's screw nut is 3 g) to a tonne (a loom sley is 25 kg)
-        mass = f.number("moving_mass_kg", min=1e-4, max=1e3)
+        mass = f.number("moving_mass_kg", 0.0, min=0.0, max=1e3) if own_bodies else \
+            f.number("moving_mass_kg", min=1e-4, max=1e3)
     # a rotary load's gravity torque depends on its centre of gravity, which [drive] does not state: off
     gravity_dir = f.string("gravity", "off" if rotary else "down", choices=("off",) if rotary else ("down", "up", "off"))
     # positions in problem files are measured upward

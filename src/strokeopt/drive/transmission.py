@@ -38,6 +38,9 @@ class Transmission:
     #: [timing] in deg)
     load_unit = "m"
     inertia = 0.0
+    #: whether the transmission's own bodies carry the load's masses (a linkage's links): the ``[drive]`` moving
+    #: mass or inertia is then only what is added to its output, zero by default
+    carries_load = False
 
     @classmethod
     def read(cls, fields, timing) -> "Transmission":
@@ -157,6 +160,21 @@ class Transmission:
     def range_error(self, x_min: float, x_max: float) -> str | None:
         """Why the load positions ``x_min..x_max`` [m] are outside what this transmission can reach, or None."""
         return None
+
+    def facts(self) -> list[tuple[str, object]]:
+        """What a report states of the transmission: ``(label with its unit, value)`` rows."""
+        return []
+
+    def inertia_at(self, phi):
+        """The transmission's own inertia on the motor shaft [kg m^2] at motor angles ``phi``: ``inertia`` for a
+        transmission of constant inertia; a linkage's varies with the crank's pose."""
+        return self.inertia + 0 * phi
+
+    def own_terms(self, phi, omega, eps) -> dict:
+        """The motor torques [N m] of the transmission's own bodies and of the forces on them, numbers or CasADi
+        alike: ``{"inertia": ..., name: ...}`` (``inertia``: ``J(phi) eps + 1/2 J'(phi) omega^2``; a constant
+        inertia's is ``inertia * eps``; a linkage adds its links' gravity and process loads by name)."""
+        return {"inertia": self.inertia * eps}
 
     def motor_kinematics(self, x, v, a):
         """Motor angle, speed and acceleration [rad, rad/s, rad/s^2] for a load motion.
@@ -327,6 +345,10 @@ class ScrewLever(Transmission):
         rho = math.atan(self.thread_friction / math.cos(self.thread_angle / 2))
         return force * self.screw_diameter / 2 * math.tan(lam + rho)
 
+    def facts(self):
+        return [("screw lead [mm]", self.lead * 1e3), ("lever arm at the nut [mm]", self.R0 * 1e3),
+                ("lever arm at the sleeve [mm]", self.R0P * 1e3)]
+
     def nut_position(self, phi):
         """x2 [m] of the nut for the screw angle ``phi`` [rad]."""
         return self.lead / (2 * math.pi) * phi
@@ -388,6 +410,9 @@ class Gearbox(Transmission):
         if not (inertia >= 0 and math.isfinite(inertia)):
             raise ValueError("gearbox inertia must be zero or positive")
         self.ratio, self.inertia, self.entry = float(ratio), float(inertia), entry
+
+    def facts(self):
+        return [("gear ratio [motor turns per output turn]", self.ratio)]
 
     def position(self, phi):
         return phi / self.ratio

@@ -79,10 +79,10 @@ class CamTableSpec:
 CAM_COLUMNS = [("position_mm", "mm", "bar position (problem frame, + up)"),
                ("velocity_m_s", "m/s", "bar velocity"), ("acceleration_m_s2", "m/s^2", "bar acceleration"),
                ("jerk_m_s3", "m/s^3", "bar jerk"),
-               ("motor_angle_deg", "deg", "motor angle = position / pulley pitch radius, or through the problem's "
-                                          "transmission (0 at 0 mm)"),
+               ("motor_angle_deg", "deg", "motor angle through the design's transmission (a pulley: position / pitch "
+                                          "radius, 0 at 0 mm; a crank, screw or linkage: from its own zero)"),
                ("motor_speed_rpm", "rpm", "motor speed"),
-               ("motor_torque_N_m", "N m", "motor torque on the design's motor and pulley (rigid load model)")]
+               ("motor_torque_N_m", "N m", "motor torque on the design's motor and transmission (rigid load model)")]
 #: A rotary load's (a sley on its shaft) in place of the first four (io/load_units.py).
 CAM_COLUMNS_ROTARY = [("position_deg", "deg", "load angle (problem frame, + up)"),
                       ("velocity_rad_s", "rad/s", "load angular velocity"),

@@ -26,10 +26,11 @@ from ..problem import Problem, parse_problem
 EXTENDS_DEPTH_MAX = 8
 
 
-#: What a linkage problem file is for, where a command that designs a stroke is given one.
-LINKAGE_FILE_HERE = ('"linkage": a crank-driven linkage file, read by strokeopt linkage, kinematics, size and '
-                     'report; solve, simulate, accuracy, tradeoff and robust design a stroke for a member driven '
-                     'by a motor (for the loom\'s sley driven by a servo: problems/loom_beatup_servo.toml)')
+#: What a linkage file without a [timing] is for, where a command that designs a stroke is given one.
+LINKAGE_FILE_HERE = ('"linkage" without a [timing]: the linkage on a crank at constant speed, read by strokeopt '
+                     'linkage, kinematics, size and report; a stroke is designed where [timing] states the motion '
+                     'of one of its outputs driven by a servo on the crank (problems/blind_stitch_servo.toml), or '
+                     'of a member driven by a motor directly (the loom\'s sley: problems/loom_beatup_servo.toml)')
 
 
 def load_problem(path: str | Path, overrides: list[str] | None = None) -> Problem:
@@ -39,7 +40,7 @@ def load_problem(path: str | Path, overrides: list[str] | None = None) -> Proble
     file = str(path)
     data = read_problem_data(path)
     transmission = data.get("transmission")
-    if isinstance(transmission, dict) and transmission.get("type") == "linkage":
+    if isinstance(transmission, dict) and transmission.get("type") == "linkage" and "timing" not in data:
         raise ProblemError(file, "transmission.type", LINKAGE_FILE_HERE)
     if isinstance(overrides, str):  # one override given as a string, not as a list of them
         overrides = [overrides]

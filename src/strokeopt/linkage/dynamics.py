@@ -54,10 +54,16 @@ def _deg(theta: float) -> float:
     return round(math.degrees(theta) % 360, 6)
 
 
-def load_magnitude(load, theta: np.ndarray) -> np.ndarray:
-    """A load's magnitude [N] over the input angle: linear from force_start to force_end in its window."""
-    rel = (theta - load.start) % (2 * math.pi)
+def load_magnitude(load, theta):
+    """A load's magnitude [N] over the input angle: linear from force_start to force_end in its window; numpy
+    for numbers, CasADi (``fmod``, ``if_else``) for symbols."""
     span = load.end - load.start
+    if isinstance(theta, (ca.SX, ca.MX)):
+        turn = 2 * math.pi
+        rel = ca.fmod(ca.fmod(theta - load.start, turn) + turn, turn)
+        ramp = load.force_start + (load.force_end - load.force_start) * ca.fmin(rel / span, 1)
+        return ca.if_else(rel <= span + 1e-12, ramp, 0)
+    rel = (theta - load.start) % (2 * math.pi)
     inside = rel <= span + 1e-12
     return np.where(inside, load.force_start + (load.force_end - load.force_start) * np.minimum(rel / span, 1), 0.0)
 
@@ -92,13 +98,25 @@ def _terms(kin: Kinematics) -> ca.Function:
     return ca.Function("dynamics_terms", [c.q, *dqs, c.theta, c.p], outs)
 
 
-def analyse_dynamics(kin: Kinematics, cycle: Cycle, omega: float) -> Dynamics:
-    """Reduced inertia, power-balance torque and Newton-Euler reactions over ``cycle`` at ``omega``."""
+def _mapped_terms(kin: Kinematics, cycle: Cycle):
     lk = kin.linkage   # the Function holds the masses and centres of gravity: they are in its key
     key = ("dynamics", len(cycle.theta), tuple((k.mass, k.cg, k.inertia_cg) for k in lk.links), lk.loads, lk.gravity)
     if key not in kin._mapped:
         kin._mapped[key] = _terms(kin).map(len(cycle.theta))
-    J, dJ, dV, unit, ne, geo, joints = _along(kin, cycle, key)
+    return _along(kin, cycle, key)
+
+
+def reduced_terms(kin: Kinematics, cycle: Cycle) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The crank's reduced inertia ``J`` [kg m^2], ``J'`` [kg m^2/rad], the gravity torque ``V'`` [N m] and each
+    process load's torque per newton of its magnitude ``u . dr/dtheta`` [m] (n x loads) over ``cycle``: what a
+    transmission through the linkage needs of its dynamics, at any crank speed."""
+    J, dJ, dV, unit, *_ = _mapped_terms(kin, cycle)
+    return J, dJ, dV, unit.reshape(len(cycle.theta), -1)
+
+
+def analyse_dynamics(kin: Kinematics, cycle: Cycle, omega: float) -> Dynamics:
+    """Reduced inertia, power-balance torque and Newton-Euler reactions over ``cycle`` at ``omega``."""
+    J, dJ, dV, unit, ne, geo, joints = _mapped_terms(kin, cycle)
     th = cycle.theta
     forces = np.array([load_magnitude(load, th) for load in kin.linkage.loads]).T.reshape(len(th), -1)
     load_torque = -np.sum(forces * unit, axis=1) if unit.size else np.zeros(len(th))

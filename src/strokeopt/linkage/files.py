@@ -45,14 +45,15 @@ class LinkageProblem:
 
 
 def is_linkage_file(path) -> bool:
-    """Whether ``path`` is a linkage problem file (``[transmission] type = "linkage"``); False for any other
-    file or one that cannot be read (its own reader then says why)."""
+    """Whether ``path`` is a linkage problem file (``[transmission] type = "linkage"`` and no ``[timing]``: the
+    crank at constant speed); False for any other file (a servo on a linkage's crank states its motion in
+    ``[timing]``: a design problem) or one that cannot be read (its own reader then says why)."""
     try:
         data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
         return False
     tr = data.get("transmission")
-    return isinstance(tr, dict) and tr.get("type") == "linkage"
+    return isinstance(tr, dict) and tr.get("type") == "linkage" and "timing" not in data
 
 
 def load_linkage_file(path, overrides: list[str] | None = None, check_cycle: bool = True) -> LinkageProblem:
@@ -82,7 +83,7 @@ def load_linkage_file(path, overrides: list[str] | None = None, check_cycle: boo
     machine.finish()
     tr = top.table("transmission")
     tr.string("type", choices=("linkage",))
-    linkage, limits = _read_linkage(tr, file, name, gravity)
+    linkage, limits = read_linkage(tr, file, name, gravity)
     tr.finish()
     synth = top.table("synthesis", required=False)
     synthesis = dict(synth.data) if synth is not None else {}   # checked below by targets.read_spec
@@ -125,11 +126,14 @@ def _blame_the_set(exc: ProblemError, data: dict, overridden: frozenset) -> Prob
     return ProblemError(exc.file, ", ".join(moved), f"{what} as set by --set: {exc.message}")
 
 
-def _read_linkage(tr: Fields, file: str, name: str, gravity: float):
+def read_linkage(tr: Fields, file: str, name: str, gravity: float, analysis: bool = True):
+    """The :class:`Linkage` of a ``[transmission]`` table ``tr`` (joints, links, crank, outputs, loads) and its
+    limits ``(min_transmission_index, near_dwell_pct, angles)``; without ``analysis`` (a linkage as a problem's
+    transmission) ``near_dwell_pct``, a criterion of the crank at constant speed, is not read (None)."""
     fields: dict[str, str] = {"structure": tr.where("links")}
     ref_deg = tr.number("reference_angle_deg", 0.0, min=-360, max=360)   # input angle at the reference pose
     index_min = tr.number("min_transmission_index", 0.0, min=0, max=1)   # sin(Alt's angle) of a dyad
-    dwell = tr.number("near_dwell_pct", 5.0, min=0.1, max=50)            # loom thesis: 5 % of the swing
+    dwell = tr.number("near_dwell_pct", 5.0, min=0.1, max=50) if analysis else None  # loom: 5 % of the swing
     angles = tr.number("angles", 720, min=36, max=36000, integer=True)    # samples per turn
     joints: list[Joint] = []
     for jf in tr.tables("joints"):

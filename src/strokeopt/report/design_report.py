@@ -235,19 +235,13 @@ def _check(s: dict, name: str) -> dict | None:
 
 
 def _transmission_facts(d: ReportData, m: Machine) -> list[tuple]:
-    """The transmission's rows of the key facts: a pulley's teeth and pitch diameter, a screw and lever's
-    lead and arms."""
+    """The transmission's rows of the key facts: a pulley's teeth and pitch diameter, else what the transmission
+    states of itself (:meth:`~strokeopt.drive.transmission.Transmission.facts`)."""
     s, tr = d.summary, d.problem.transmission
     if m.pulley:
         return [("transmission", "belt pulley", None), ("pulley teeth", s.get("pulley_teeth"), "pulley_teeth"),
                 ("pulley pitch diameter [mm]", s.get("pulley_pitch_diameter_mm"), "pulley_pitch_diameter_mm")]
-    rows = [("transmission", m.transmission, None)]
-    for label, attr, scale in (("screw lead [mm]", "lead", 1e3), ("lever arm at the nut [mm]", "R0", 1e3),
-                               ("lever arm at the sleeve [mm]", "R0P", 1e3),
-                               ("gear ratio [motor turns per output turn]", "ratio", 1.0)):
-        if getattr(tr, attr, None) is not None:
-            rows.append((label, getattr(tr, attr) * scale, None))
-    return rows
+    return [("transmission", m.transmission, None)] + [(label, value, None) for label, value in tr.facts()]
 
 
 def section_problem(d: ReportData) -> str:

@@ -13,7 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from ..drive.checks import cycle_values, torque_limit
-from ..drive.transmissions import transmission_label
+from ..transmissions import transmission_label
 from ..io.cycle import cycle_of
 from .format import format_table, period_text
 from .units import direction_word
@@ -38,9 +38,11 @@ def sizing_verdict(sizing) -> str:
             if not chk.ok:
                 counts[chk.name] = counts.get(chk.name, 0) + 1
     failing = ", ".join(f"{n} ({k} of {len(sizing.candidates)})" for n, k in sorted(counts.items(), key=lambda x: -x[1]))
-    return (f"infeasible: no motor and pulley passes every check at {sizing.spm:g} spm; binding limit: {c.name} "
-            f"({closest.motor.name} with {closest.pulley.teeth} teeth, the closest: {c.value:.4g} {c.unit} > "
-            f"limit {c.limit:.4g} {c.unit}); failing checks: {failing}")
+    belt = closest.pulley.teeth is not None
+    parts = "motor and pulley" if belt else "motor"
+    which = f"{closest.motor.name} with {closest.pulley.teeth} teeth" if belt else closest.motor.name
+    return (f"infeasible: no {parts} passes every check at {sizing.spm:g} spm; binding limit: {c.name} "
+            f"({which}, the closest: {c.value:.4g} {c.unit} > limit {c.limit:.4g} {c.unit}); failing checks: {failing}")
 
 
 def sizing_text(sizing, report: dict, explain: bool = False) -> str:

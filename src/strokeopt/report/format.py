@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from ..drive.transmissions import transmission_label
+from ..transmissions import transmission_label
 from ..io.cycle import STITCH, cycle_of
 from ..io.plain import format_value, to_json  # noqa: F401  (report's names for them)
 

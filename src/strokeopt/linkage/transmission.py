@@ -1,0 +1,286 @@
+"""A planar linkage as a problem's transmission: a servo motor turns the linkage's crank (through a gearbox of
+``ratio`` motor turns per crank turn) and the problem's load is one of the linkage's outputs (a rocker's angle,
+a point's arc or coordinate).
+
+The position function is the output over the crank angle from the exact closure (kinematics.py: Newton with
+continuation, derivatives by AD), made a Fourier series of the crank angle (series.py) so that it evaluates on
+numbers and on CasADi symbols alike and its transfer functions come by AD as every transmission's; the links'
+reduced inertia ``J(theta)``, the gravity torque ``V'(theta)`` and each process load's torque per newton come
+the same way from dynamics.py. Every series is checked against the exact closure between its samples
+(:data:`FIT_TOLERANCE`); a linkage the samples do not resolve is refused.
+
+The design states the load's motion in output coordinates, so the output must be monotonic over the crank
+angles the motor turns through: the crank oscillates on one branch of the output, between two extremes where
+``d output / d theta`` vanishes, kept :data:`~strokeopt.drive.crank_slider.DEAD_CENTRE_MARGIN_DEG` from them as
+a crank and connecting rod is (``crank_range_deg`` states the branch; by default the one through the reference
+pose). The motor angle is zero at the reference pose. The motor torque adds to the rotor's and the load's
+
+    J_gear eps + (J(theta) eps / i + 1/2 J'(theta) omega^2 / i^2) / i + (V'(theta) - sum_i F_i u_i(theta)) / i,
+
+``theta = theta_ref + phi / i`` (:meth:`LinkageTransmission.own_terms`): a direct or geared servo on the crank.
+A crank that turns through the extremes (the hybrid, designed in crank coordinates) is not this transmission.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from ..drive.crank_slider import DEAD_CENTRE_MARGIN_DEG
+from ..drive.transmission import Transmission, check_reach
+from .dynamics import load_magnitude, reduced_terms
+from .kinematics import kinematics_of
+from .model import Linkage
+from .series import Series
+
+#: Largest error of a series between its samples against the exact closure, relative to the function's
+#: largest value (its swing for the output): above it the linkage is refused (more ``angles`` a turn).
+FIT_TOLERANCE = 1e-8
+
+
+@dataclass(frozen=True)
+class LinkageFit:
+    """The series of one output and of the dynamics, with the samples they came from and their check."""
+
+    theta: np.ndarray          # crank angles of the samples [rad], from the reference angle
+    y: Series
+    J: Series
+    dV: Series
+    units: tuple               # one Series per process load: torque per newton [m]
+    index: np.ndarray          # smallest transmission index at each sample
+    error: float               # largest relative error between the samples
+
+
+@lru_cache(maxsize=32)
+def fit_linkage(linkage: Linkage, output: str, samples: int) -> LinkageFit:
+    """The series of ``output`` and of the dynamics of ``linkage`` from ``samples`` poses a turn, checked at the
+    poses between them; ValueError when they do not resolve it."""
+    kin = kinematics_of(linkage)
+    fine = kin.solve(2 * samples)  # the even poses are fitted, the odd ones check
+    y, d1, *_ = kin.output(fine, output)
+    J, _, dV, unit = reduced_terms(kin, fine)
+    theta0 = float(fine.theta[0])
+    slope = float(np.mean(d1))
+    slope = slope if abs(slope) > 1e-9 * max(float(np.abs(d1).max()), 1e-300) else 0.0
+    exact = [y, J, dV] + [unit[:, i] for i in range(unit.shape[1])]
+    series = [Series.fit(theta0, f[0::2], slope if k == 0 else 0.0) for k, f in enumerate(exact)]
+    odd = fine.theta[1::2]
+    scale = lambda f: max(float(np.ptp(f)), float(np.abs(f).max()), 1e-300)  # noqa: E731
+    error = max(float(np.abs(s(odd) - f[1::2]).max()) / scale(f) for s, f in zip(series, exact))
+    error = max(error, float(np.abs(series[0].derivative()(odd) - d1[1::2]).max()) / scale(d1))
+    index = fine.index.min(axis=1)[0::2] if fine.index.size else np.ones(samples)
+    return LinkageFit(fine.theta[0::2], series[0], series[1], series[2], tuple(series[3:]), index, error)
+
+
+class LinkageTransmission(Transmission):
+    """A servo on the crank of ``linkage`` (through ``ratio`` motor turns per crank turn, the gearbox's own
+    ``gear_inertia`` [kg m^2] on the motor shaft) driving the load ``output`` (module docstring);
+    ``crank_range`` [rad] the crank angles of the branch the motor turns through, None: the branch through the
+    reference pose kept the dead-centre margin from its extremes."""
+
+    name = "linkage"
+    label = "planar linkage"
+    load_unit = None  # the output's: "rad" for an angle, "m" for an arc or a coordinate
+    carries_load = True  # the links' masses are the load's
+
+    @classmethod
+    def read(cls, fields, timing) -> "LinkageTransmission":
+        return read_linkage_transmission(cls, fields, timing)
+
+    def __init__(self, linkage: Linkage, output: str, ratio: float = 1.0, gear_inertia: float = 0.0,
+                 samples: int = 720, crank_range: tuple[float, float] | None = None):
+        if not (ratio > 0 and math.isfinite(ratio)) or not (gear_inertia >= 0 and math.isfinite(gear_inertia)):
+            raise ValueError("need a positive ratio and a gearbox inertia of zero or more")
+        out = next(o for o in linkage.outputs if o.name == output)
+        self.linkage, self.output, self.samples = linkage, output, int(samples)
+        self.ratio, self.inertia = float(ratio), float(gear_inertia)  # the links' inertia varies: inertia_at
+        self.load_unit = "rad" if out.kind == "angle" else "m"
+        self.theta_ref = linkage.crank.reference_angle
+        self.fit = fit_linkage(linkage, output, self.samples)
+        if self.fit.error > FIT_TOLERANCE:
+            raise ValueError(f"its series miss the exact closure by {self.fit.error:.2g} (relative) between "
+                             f"{self.samples} samples a turn; more samples (angles) resolve it")
+        self._dy, self._dJ = self.fit.y.derivative(), self.fit.J.derivative()
+        self._d2y = self._dy.derivative()
+        self.branch = self._branch()
+        self.crank_range = self._working_range() if crank_range is None else self._within_branch(crank_range)
+
+    # -- the branch the motor turns through ------------------------------------------------------------
+    def _extreme(self, theta: float) -> float:
+        """The crank angle of the output's extreme near ``theta`` (Newton on its derivative)."""
+        for _ in range(30):
+            step = float(self._dy(theta)) / float(self._d2y(theta))
+            theta -= step
+            if abs(step) < 1e-14:
+                break
+        return theta
+
+    def _branch(self) -> tuple[float, float]:
+        """The crank angles ``(a, b)``, a < b, of the output's extremes around the reference pose."""
+        th, d = self.fit.theta, self._dy(self.fit.theta)
+        n = len(th)
+        sense = np.sign(d[0]) or np.sign(d[1])
+        ahead = next((j for j in range(1, n + 1) if np.sign(d[j % n]) != sense), None)
+        if ahead is None:
+            raise ValueError(f"the output {self.output} turns fully with the crank: it has no extremes to oscillate "
+                             "between")
+        behind = next(j for j in range(0, -n, -1) if np.sign(d[j % n]) != sense)
+        step = 2 * math.pi / n
+        hi = self._extreme(self.theta_ref + (ahead - 0.5) * step)
+        lo = self._extreme(self.theta_ref + (behind + 0.5) * step)
+        return lo, hi
+
+    def _working_range(self) -> tuple[float, float]:
+        margin = math.radians(DEAD_CENTRE_MARGIN_DEG)
+        lo, hi = self.branch
+        if hi - lo <= 2 * margin:
+            raise ValueError(f"the output's branch through the reference pose spans {math.degrees(hi - lo):.3g} deg of "
+                             f"crank, no more than twice the {DEAD_CENTRE_MARGIN_DEG:g} deg kept from its extremes")
+        return lo + margin, hi - margin
+
+    def _within_branch(self, crank_range) -> tuple[float, float]:
+        a, b = sorted(float(c) for c in crank_range)
+        lo, hi = self.branch
+        shift = 2 * math.pi * round((0.5 * (a + b) - 0.5 * (lo + hi)) / (2 * math.pi))
+        a, b = a - shift, b - shift
+        if not (lo <= a and b <= hi):
+            raise ValueError(f"{math.degrees(a + shift):.4g}..{math.degrees(b + shift):.4g} deg leaves the branch of "
+                             f"the output between its extremes at {math.degrees(lo):.4g} and {math.degrees(hi):.4g} deg "
+                             "of crank, where the output turns back")
+        return a, b
+
+    # -- the position function -------------------------------------------------------------------------
+    def crank_angle(self, phi):
+        """The crank angle [rad] at the motor angle ``phi`` (zero at the reference pose)."""
+        return self.theta_ref + phi / self.ratio
+
+    def position(self, phi):
+        return self.fit.y(self.crank_angle(phi))
+
+    def chain(self):
+        return [("crank", self.crank_angle, "rad"), ("load", self.fit.y, self.load_unit)]
+
+    def _inverse_grid(self) -> tuple[np.ndarray, np.ndarray]:
+        """The output (ascending) and the crank angle at 2001 crank angles of the range."""
+        th = np.linspace(*self.crank_range, 2001)
+        x = self.fit.y(th)
+        return (x, th) if x[-1] > x[0] else (x[::-1], th[::-1])
+
+    def _inverse_guess(self) -> ca.Function:
+        if not hasattr(self, "_guess"):
+            x, th = self._inverse_grid()
+            self._guess = ca.interpolant(f"{self.name}_guess", "bspline", [x.tolist()], th.tolist())
+        return self._guess
+
+    def inverse_position(self, x):
+        """On the branch: a cubic spline of the crank angle over the output, then one Newton step on the series."""
+        theta = self._inverse_guess()(x)
+        theta = theta - (self.fit.y(theta) - x) / self._dy(theta)
+        return self.ratio * (theta - self.theta_ref)
+
+    def range_error(self, x_min: float, x_max: float) -> str | None:
+        ends = sorted(float(self.fit.y(t)) for t in self.crank_range)
+        scale = 1e3 if self.load_unit == "m" else 180 / math.pi
+        unit = "mm" if self.load_unit == "m" else "deg"
+        for x in (x_min, x_max):
+            if not ends[0] - 1e-12 <= x <= ends[1] + 1e-12:
+                a, b = (math.degrees(t) for t in self.crank_range)
+                return (f"the position {x * scale:.6g} {unit} of {self.output} is outside {ends[0] * scale:.6g}.."
+                        f"{ends[1] * scale:.6g} {unit}, where the crank turns from {a:.4g} to {b:.4g} deg on one branch "
+                        f"of the output, {DEAD_CENTRE_MARGIN_DEG:g} deg from its extremes")
+        return None
+
+    def smallest_index(self) -> float:
+        """The smallest transmission index of the linkage over the crank range."""
+        th = self.fit.theta
+        a, b = self.crank_range
+        inside = ((th - a) % (2 * math.pi)) <= (b - a)
+        return float(self.fit.index[inside].min()) if inside.any() else float(self.fit.index.min())
+
+    def facts(self):
+        a, b = (math.degrees(t) for t in self.crank_range)
+        return [("linkage output (the load)", self.output), ("gear ratio [motor turns per crank turn]", self.ratio),
+                ("crank range [deg]", f"{a:.4g} to {b:.4g}"),
+                ("series of the closure [harmonics; largest relative error]",
+                 f"{self.fit.y.harmonics}; {self.fit.error:.1e}")]
+
+    # -- the links' dynamics on the motor shaft ----------------------------------------------------------
+    def inertia_at(self, phi):
+        theta = self.crank_angle(phi)
+        return self.inertia + self.fit.J(theta) / self.ratio**2
+
+    def own_terms(self, phi, omega, eps) -> dict:
+        i = self.ratio
+        theta = self.crank_angle(phi if isinstance(phi, (ca.SX, ca.MX)) else np.asarray(phi, dtype=float))
+        out = {"inertia": self.inertia_at(phi) * eps + 0.5 * self._dJ(theta) / i**3 * omega**2}
+        if self.linkage.gravity:
+            out["linkage gravity"] = self.fit.dV(theta) / i
+        for load, unit in zip(self.linkage.loads, self.fit.units):
+            out[load.name] = -load_magnitude(load, theta) * unit(theta) / i
+        return out
+
+    # numbers: the series in numpy, without a CasADi call per sample
+    def transfer(self, phi):
+        theta, i = self.crank_angle(np.asarray(phi, dtype=float)), self.ratio
+        return self.fit.y(theta), self._dy(theta) / i, self._d2y(theta) / i**2
+
+    def motor_angle(self, x):
+        """On the branch: linear interpolation of the sampled output, then Newton steps on the series."""
+        x = np.asarray(x, dtype=float)
+        grid_x, grid_theta = self._inverse_grid()
+        theta = np.interp(x, grid_x, grid_theta)
+        for _ in range(4):
+            theta = theta - (self.fit.y(theta) - x) / self._dy(theta)
+        return self.ratio * (theta - self.theta_ref)
+
+    def __repr__(self) -> str:
+        return f"LinkageTransmission(output={self.output!r}, ratio={self.ratio:g}, harmonics={self.fit.y.harmonics})"
+
+
+def read_linkage_transmission(cls, fields, timing) -> LinkageTransmission:
+    """``[transmission] type = "linkage"`` of a problem: the linkage (joints, links, crank, outputs, loads as a
+    linkage file states them), ``output`` (the load: default the first), ``ratio`` and ``gear_inertia_kg_cm2``
+    of a gearbox between the motor and the crank, ``gravity_m_s2`` (along -y of the linkage's frame),
+    ``crank_range_deg`` (the branch) and ``angles`` (samples a turn)."""
+    from .files import read_linkage
+
+    # a gearbox of 0.1 (a step-up) to 1000 motor turns per crank turn, its inertia as Gearbox's; gravity as the
+    # linkage file's (0: none, 9.81 along -y); the branch within one turn
+    ratio = fields.number("ratio", 1.0, min=0.1, max=1000.0)
+    gear = fields.number("gear_inertia_kg_cm2", 0.0, min=0.0, max=1e6) * 1e-4
+    gravity = fields.number("gravity_m_s2", 0.0, min=0.0, max=20.0)
+    crank_range = fields.raw("crank_range_deg", None)
+    if crank_range is not None and not (isinstance(crank_range, list) and len(crank_range) == 2 and
+                                        all(isinstance(c, (int, float)) and math.isfinite(c) for c in crank_range)
+                                        and 0 < abs(crank_range[1] - crank_range[0]) < 360):
+        raise fields.error("crank_range_deg", "must be [from, to] in deg of crank angle, less than a turn apart")
+    linkage, (index_min, _, angles) = read_linkage(fields, fields.file, "linkage", gravity, analysis=False)
+    names = [o.name for o in linkage.outputs]
+    if not names:
+        raise fields.error("outputs", "a linkage that drives a load names it: add [[transmission.outputs]]")
+    output = fields.string("output", names[0], choices=tuple(names))
+    kind = next(o.kind for o in linkage.outputs if o.name == output)
+    unit = "rad" if kind == "angle" else "m"
+    if unit != timing.unit:
+        raise fields.error("output", f"{output!r} is {'an angle' if unit == 'rad' else 'a length (' + kind + ')'}: "
+                                     f"[timing] states its positions in {'deg' if unit == 'rad' else 'mm'}, not in "
+                                     f"{'deg' if timing.unit == 'rad' else 'mm'}")
+    try:
+        tr = cls(linkage, output, ratio, gear, angles,
+                 None if crank_range is None else tuple(math.radians(c) for c in crank_range))
+    except ValueError as exc:
+        raise fields.error("crank_range_deg" if crank_range is not None and "branch" in str(exc) else "angles",
+                           str(exc)) from None
+    check_reach(tr, fields, "crank_range_deg" if crank_range is not None else "output", timing,
+                "positions within the branch, or another crank_range_deg")
+    smallest = tr.smallest_index()
+    if smallest < index_min:
+        raise fields.error("min_transmission_index", f"the linkage's transmission index falls to {smallest:.3g} over "
+                                                     f"the crank range, below {index_min:g}")
+    fields.finish()
+    return tr
+

@@ -1,0 +1,169 @@
+"""A planar linkage as a problem's transmission (issue 32 item 1): its position function, transfer functions and
+the motor torque of its links come from the closure (as Fourier series checked against it), and every problem
+goes through the one reader and the one design.
+
+The reference for the torque is the linkage package's own dynamics: at constant crank speed the power balance
+and Newton-Euler give the crank torque (test_linkage_dynamics.py checks them against each other); driven through
+the transmission as a load motion on the output, the same torque must come out of drive/load.py's load_torque.
+"""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from strokeopt.cli.main import main
+from strokeopt.drive.load import Load, load_torque, reflected_inertia
+from strokeopt.errors import ProblemError
+from strokeopt.files.problem_file import load_problem
+from strokeopt.linkage.dynamics import analyse_dynamics
+from strokeopt.linkage.files import load_linkage_file
+from strokeopt.linkage.kinematics import kinematics_of
+from strokeopt.linkage.transmission import FIT_TOLERANCE, LinkageTransmission
+
+from conftest import ROOT
+
+LOOM = ROOT / "problems" / "loom_beatup_sixbar.toml"
+BLIND = ROOT / "problems" / "blind_stitch_needle.toml"
+SERVO = ROOT / "problems" / "blind_stitch_servo.toml"
+
+
+def _on_branch(tr, theta):
+    a, b = tr.crank_range
+    return ((theta - a) % (2 * math.pi)) <= (b - a)
+
+
+@pytest.mark.parametrize("ratio", [1.0, 7.5])
+def test_torque_through_the_transmission_is_the_linkage_s_own(ratio):
+    # the loom's six-bar: masses, inertia about the sley shaft, gravity and the beat-up force (its window
+    # 352 -> 360 deg lies on the branch); the crank at the file's 200 rpm
+    problem = load_linkage_file(LOOM)
+    tr = LinkageTransmission(problem.linkage, "sley_angle", ratio=ratio, gear_inertia=3e-4)
+    assert tr.fit.error < FIT_TOLERANCE
+    kin = kinematics_of(problem.linkage)
+    cycle = kin.solve(720)
+    w = problem.omega
+    dyn = analyse_dynamics(kin, cycle, w)
+    y, d1, d2, _ = kin.output(cycle, "sley_angle")
+    inside = _on_branch(tr, cycle.theta)
+    assert inside.sum() > 300 and _on_branch(tr, np.radians([358.0])).all()  # the beat-up's window is driven
+    rotor = 2e-4
+    terms = load_torque(rotor, tr, Load(0.0), y[inside], d1[inside] * w, d2[inside] * w**2)
+    # the motor turns ratio times the crank, from the reference pose
+    crank = (cycle.theta[inside] - tr.theta_ref + math.pi) % (2 * math.pi) - math.pi
+    np.testing.assert_allclose(terms.phi, ratio * crank, atol=1e-8)
+    np.testing.assert_allclose(terms.omega, ratio * w, rtol=1e-8)
+    # at constant crank speed the motor's rotor and the gearbox are not accelerated: the crank torque over i
+    scale = np.abs(dyn.torque).max()
+    np.testing.assert_allclose(terms.total, dyn.torque[inside] / ratio, atol=1e-7 * scale)
+    np.testing.assert_allclose(terms.total, dyn.torque_ne[inside] / ratio, atol=1e-6 * scale)
+    assert set(terms.forces) == {"linkage gravity", "beat-up"}
+    # the links' inertia on the motor shaft: the reduced inertia over i^2, with the gearbox's
+    j = np.ravel(tr.inertia_at(terms.phi))
+    np.testing.assert_allclose(j, 3e-4 + dyn.J[inside] / ratio**2, rtol=1e-8)
+    assert reflected_inertia(tr, Load(0.0), terms.phi) == pytest.approx(j.max(), rel=1e-12)
+
+
+def test_an_accelerating_motor_adds_the_rotor_and_the_links_inertia():
+    # J(phi) eps + 1/2 J'(phi) omega^2 with the rotor: a motion that is not at constant crank speed
+    problem = load_linkage_file(BLIND)
+    tr = LinkageTransmission(problem.linkage, "needle_angle")
+    phi = np.linspace(-1.0, 1.5, 7)
+    omega, eps = 30.0 + 0 * phi, 4000.0 + 0 * phi
+    x, mu, nu = tr.transfer(phi)
+    terms = load_torque(1e-5, tr, Load(0.0), x, mu * omega, mu * eps + nu * omega**2)
+    np.testing.assert_allclose(terms.eps, eps, rtol=1e-7)
+    assert problem.linkage.gravity == 0 and all(link.mass == 0 for link in problem.linkage.links)
+    np.testing.assert_allclose(terms.total, 1e-5 * eps, rtol=1e-7)  # the file's links have no mass
+
+
+def test_position_inverse_and_symbols_agree():
+    tr = LinkageTransmission(load_linkage_file(BLIND).linkage, "needle", ratio=2.0)
+    assert tr.load_unit == "m"
+    lo, hi = tr.crank_range
+    phi = 2.0 * (np.linspace(lo, hi, 41) - tr.theta_ref)
+    x, mu, nu = tr.transfer(phi)
+    np.testing.assert_allclose(tr.motor_angle(x), phi, atol=1e-9)
+    s = ca.SX.sym("s")
+    f = ca.Function("f", [s], [*tr.symbolic_transfer(s), tr.inverse_position(s)])
+    for k in (0, 17, 40):
+        vals = [float(v) for v in f(phi[k])]
+        assert vals[:3] == pytest.approx([x[k], mu[k], nu[k]], rel=1e-12, abs=1e-15)
+        assert float(f(x[k])[3]) == pytest.approx(phi[k], abs=1e-9)
+    # the branch: the needle's reversals (docs: minimum at 280.5 deg, maximum at 104.5 deg of crank, 0.5 deg steps)
+    a, b = (math.degrees(t) % 360 for t in tr.branch)
+    assert a == pytest.approx(280.66, abs=0.3) and b == pytest.approx(104.38, abs=0.3)
+    assert np.all(np.abs(mu) > 0) and (np.all(mu > 0) or np.all(mu < 0))
+
+
+def test_the_servo_problem_is_read_by_the_one_reader():
+    problem = load_problem(SERVO)
+    tr = problem.transmission
+    assert isinstance(tr, LinkageTransmission) and tr.output == "needle_angle" and problem.timing.rotary
+    assert problem.drive.load.moving_mass == 0.0  # the links carry the load
+    lo, hi = (math.degrees(t) for t in tr.crank_range)
+    assert (lo, hi) == pytest.approx((-74.3, 99.4))
+
+
+@pytest.mark.parametrize("setting, field, words", [
+    ('transmission.output="needle"', "transmission.output", "[timing] states its positions in mm, not in deg"),
+    ("timing.start_position_deg=-2.8", "transmission.crank_range_deg", "outside"),
+    ("transmission.crank_range_deg=[-74.3, 110.0]", "transmission.crank_range_deg", "leaves the branch"),
+    ("transmission.crank_range_deg=[-74.3]", "transmission.crank_range_deg", "must be [from, to]"),
+    ("transmission.near_dwell_pct=5", "transmission.near_dwell_pct", "unknown"),
+    ("transmission.min_transmission_index=0.9", "transmission.min_transmission_index", "falls to"),
+    ("transmission.ratio=0", "transmission.ratio", ""),
+])
+def test_bad_linkage_transmission_fields_are_refused_by_name(setting, field, words):
+    with pytest.raises(ProblemError) as err:
+        load_problem(SERVO, [setting])
+    assert err.value.field == field and words in err.value.message
+
+
+def test_a_linkage_file_without_timing_says_what_it_is_for(capsys):
+    assert main(["solve", str(BLIND)]) == 2
+    err = capsys.readouterr().err
+    assert "without a [timing]" in err and "blind_stitch_servo.toml" in err
+
+
+def test_size_on_the_servo_linkage(capsys):
+    import json
+
+    assert main(["size", str(SERVO), "--json", "--motor", "055U2B30"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["status"] == "ok"
+    # at the machine's own 2500 spm the oscillating crank is far beyond the motor (the rotor's inertia swung
+    # 174 deg of crank for 10 deg of needle: torque grows with the rate squared)
+    assert main(["size", str(SERVO), "--json", "--motor", "055U2B30", "--spm", "2500"]) == 1
+    out = json.loads(capsys.readouterr().out)
+    assert out["status"] == "infeasible" and "no motor passes" in out["verdict"] and "055U2B30, the closest" in out["verdict"]
+
+
+@pytest.mark.slow
+def test_the_servo_on_the_crank_is_designed_through_the_one_pipeline(tmp_path, capsys):
+    """``strokeopt solve`` of the servo-on-the-crank file: a verdict, design.json, and the design's torque read back
+    through the transmission's numbers path equals what the NLP held (its symbols path)."""
+    import json
+
+    from strokeopt.design.torque import design_torque
+    from strokeopt.studies.verified import solve_verified
+
+    verified = solve_verified(load_problem(SERVO))
+    d = verified.design
+    assert verified.ok and verified.status == "optimal" and "5 design limits met" in verified.verdict
+    assert d.problem.transmission.name == "linkage" and d.motor == "055U2B30"
+    # the least peak torque (a regression value of this file, docs/linkages.md: 0.258 N m) beats every classic
+    # law that meets the problem's rest order; the modified sine needs 1.65 N m
+    assert d.objective_value == pytest.approx(0.2578, rel=0.01)
+    feasible = [row for row in verified.comparison if row.get("feasible") is True and row["law"] != "optimal"]
+    assert feasible and all(row["peak_torque_N_m"] > 3 * d.objective_value for row in feasible)
+    _, terms = design_torque(d, samples=20001)
+    assert np.abs(terms.total).max() == pytest.approx(d.objective_value, rel=5e-3)
+    out = tmp_path / "out"
+    assert main(["solve", str(SERVO), "--out", str(out), "--json", "--plot", "none"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["status"] == "optimal" and report["drive"]["transmission"] == "linkage"
+    assert (out / "design.json").exists() and (out / "cam_table.csv").exists()
