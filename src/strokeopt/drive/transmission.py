@@ -161,6 +161,13 @@ class Transmission:
         """Why the load positions ``x_min..x_max`` [m] are outside what this transmission can reach, or None."""
         return None
 
+    def ratio_range(self, x_min: float, x_max: float, samples: int = 201) -> tuple[float, float]:
+        """The smallest and largest ratio ``|dx/dphi|`` [m or rad per rad] over the load positions ``x_min..x_max``
+        (sampled between them, not only at the ends: a linkage's ratio may be equal at both and not between)."""
+        x = np.linspace(x_min, x_max, samples)
+        mu = np.abs(np.ravel(self.transfer(np.ravel(self.motor_angle(x)))[1]))
+        return float(mu.min()), float(mu.max())
+
     def facts(self) -> list[tuple[str, object]]:
         """What a report states of the transmission: ``(label with its unit, value)`` rows."""
         return []
@@ -435,8 +442,7 @@ SCREW_ANGLE_MAX_DEG = 90.0
 def check_reach(tr: Transmission, fields, key: str, timing, remedy: str) -> None:
     """Refuse (naming ``key`` of ``fields``) a transmission ``tr`` whose range the positions of ``timing``
     leave (:meth:`Transmission.range_error`); ``remedy`` says what to change."""
-    positions = [p for i in timing.intervals for p in (i.start_position, i.end_position)]
-    why = tr.range_error(min(positions), max(positions))
+    why = tr.range_error(*timing.position_range)
     if why is not None:
         raise fields.error(key, f"the strokes of [timing] reach beyond the {tr.label}'s range: {why}; {remedy}")
 

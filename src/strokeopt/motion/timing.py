@@ -91,6 +91,12 @@ class TimingDiagram:
         return tuple(i for i in self.intervals if i.is_move)
 
     @property
+    def position_range(self) -> tuple[float, float]:
+        """The lowest and highest position the intervals start or end at (SI)."""
+        ends = [p for i in self.intervals for p in (i.start_position, i.end_position)]
+        return min(ends), max(ends)
+
+    @property
     def handover_move(self) -> Interval | None:
         return next((i for i in self.intervals if i.handover), None)
 

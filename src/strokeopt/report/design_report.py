@@ -150,11 +150,10 @@ def motor_scale(problem, design) -> tuple[float | None, str]:
     if design.radius:
         return 1.0 / design.radius, f"output over the pulley radius {design.radius * 1e3:.3f} mm"
     tr, label = problem.transmission, machine_of(problem).transmission
-    positions = np.array(sorted({p for i in problem.timing.intervals for p in (i.start_position, i.end_position)}))
-    mus = np.abs(np.ravel(tr.transfer(np.ravel(tr.motor_angle(positions)))[1]))
-    if mus.max() > (1 + RATIO_SPREAD_MAX) * mus.min():
+    lo, hi = tr.ratio_range(*problem.timing.position_range)
+    if hi > (1 + RATIO_SPREAD_MAX) * lo:
         scale, unit = _position_scale(problem)
-        return None, (f"the {label}'s ratio runs from {mus.min() * scale:.4g} to {mus.max() * scale:.4g} "
+        return None, (f"the {label}'s ratio runs from {lo * scale:.4g} to {hi * scale:.4g} "
                       f"{unit}/rad over the stroke: the motor's motion is no scale of the output's, its speed and "
                       "torque are in the drive's figure")
     mu = float(np.ravel(tr.transfer(np.zeros(1))[1])[0])

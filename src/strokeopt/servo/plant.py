@@ -113,9 +113,8 @@ def _torsion_axis(problem, settings: ServoSettings, motor, catalogue) -> DriveAx
     """The axis of a drive without a belt: the motor, the transmission's constant ratio and the torsional
     stiffness of its gearbox or shaft at the load (``[servo] torsional_stiffness_N_m_arcmin``)."""
     file, drive, tr = str(problem.file), problem.drive, problem.transmission
-    positions = np.array([p for i in problem.timing.intervals for p in (i.start_position, i.end_position)])
-    mu = np.abs(np.ravel(tr.transfer(np.ravel(tr.motor_angle(positions)))[1]))   # the ratio over the stroke
-    if not mu.max() - mu.min() <= 1e-9 * mu.max():
+    lo, hi = tr.ratio_range(*problem.timing.position_range)   # the ratio over the stroke
+    if not hi - lo <= 1e-9 * hi:
         raise ProblemError(file, "transmission.type", f"is {tr.name!r}: the servo model holds a constant ratio "
                                                       f"(belt_pulley or gearbox); the ratio of a {tr.label} changes "
                                                       "with its position")
