@@ -40,11 +40,15 @@ def add_linkage_parser(sub, problem_parent) -> None:
 
 
 def cmd_linkage(args) -> int:
+    from ..errors import ProblemError
     from ..linkage.files import load_linkage_file
     from ..report.format import to_json
 
     if args.synthesize:
         return _synthesize(args)
+    for flag, value in (("--seed", args.seed), ("--starts", args.starts)):
+        if value is not None:
+            raise ProblemError(flag, "", "sets the synthesis: give it with --synthesize")
     problem = load_linkage_file(args.problem, args.overrides)
     from ..linkage.summary import summarize
 
@@ -75,6 +79,7 @@ def _figure(args, problem, summary, command: str, linkage=None, tags=()) -> None
 
 
 def _synthesize(args) -> int:
+    from ..errors import ProblemError
     from ..linkage.kinematics import Kinematics
     from ..linkage.files import load_linkage_file
     from ..linkage.summary import summarize
@@ -82,10 +87,13 @@ def _synthesize(args) -> int:
     from ..report.format import to_json
     from ..report.linkage import synthesis_text
 
+    # the ranges of the file's synthesis.starts and synthesis.seed (linkage/targets.py)
+    if args.starts is not None and not 1 <= args.starts <= 200:
+        raise ProblemError("--starts", "", f"{args.starts}: the synthesis solves 1 to 200 starts")
+    if args.seed is not None and not 0 <= args.seed <= 2**31:
+        raise ProblemError("--seed", "", f"{args.seed}: a seed is 0 to 2^31")
     problem = load_linkage_file(args.problem, args.overrides, check_cycle=False)
     if not problem.synthesis:
-        from ..errors import ProblemError
-
         raise ProblemError(args.problem, "synthesis", "--synthesize needs a [synthesis] section (targets, bounds)")
     result = synthesize(problem, starts=args.starts, seed=args.seed)
     rms_max = float(problem.synthesis.get("rms_max_m_s", math.inf))

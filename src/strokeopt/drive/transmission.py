@@ -21,6 +21,7 @@ import casadi as ca
 import numpy as np
 
 from .._casadi import evaluate
+from ..io.fields import _REQUIRED
 
 
 class Transmission:
@@ -406,10 +407,28 @@ class Gearbox(Transmission):
         # motor turns per output turn: 1 (a direct drive) to 1000 (a two-stage worm); a gearbox's own inertia on
         # the motor shaft as a rotor's (catalogue.py: to 1e6 kg cm^2). The ratio is the problem's design choice:
         # a design uses it as stated (a study compares ratios by --set transmission.ratio=...)
-        gear = cls(trans.number("ratio", min=1.0, max=1000.0), trans.number("inertia_kg_cm2", 0.0, min=0.0, max=1e6) * 1e-4,
-                   trans.string("gearbox", None))
+        name = trans.string("gearbox", None)
+        entry = None
+        if name is not None:  # the shipped catalogue's entry: it supplies the ratio and inertia, or must agree
+            from .gearboxes import load_gearboxes
+
+            known = {g.name: g for g in load_gearboxes()}
+            if name not in known:
+                raise trans.error("gearbox", f"{name!r} is not in the gearbox catalogue (drive/data/gearboxes.toml: "
+                                             f"{', '.join(known)}); for a gearbox of your own, state its ratio and "
+                                             "inertia_kg_cm2 without a gearbox name")
+            entry = known[name]
+        ratio = trans.number("ratio", entry.ratio if entry else _REQUIRED, min=1.0, max=1000.0)
+        inertia = trans.number("inertia_kg_cm2", entry.inertia * 1e4 if entry else 0.0, min=0.0, max=1e6) * 1e-4
+        if entry is not None:
+            for key, value, own in (("ratio", ratio, entry.ratio), ("inertia_kg_cm2", inertia, entry.inertia)):
+                if not math.isclose(value, own, rel_tol=1e-9, abs_tol=1e-15):
+                    shown = (value, own) if key == "ratio" else (value * 1e4, own * 1e4)
+                    blame = "gearbox" if trans.where("gearbox") in trans.overridden else key  # what the user set
+                    raise trans.error(blame, f"{name}: the catalogue's has {key} = {shown[1]:g}, the file {shown[0]:g}: "
+                                             "a named gearbox supplies its values (omit them), or name none")
         trans.finish()
-        return gear
+        return cls(ratio, inertia, name)
 
     def __init__(self, ratio: float, inertia: float = 0.0, entry: str | None = None):
         if not (ratio > 0 and math.isfinite(ratio)):

@@ -21,6 +21,8 @@ from .sizing import CrankDrive, read_crank_drive
 
 KGF_CM_S2 = 9.80665 * 0.01    # kg m^2 per kgf cm s^2 (1 kgf = 9.80665 N, 1 cm = 0.01 m)
 KINDS = ("angle", "arc", "x", "y")
+#: The least distance of two joints of one link [m]: closer, the link has no direction (a crank of length zero).
+JOINTS_APART_M = 1e-6
 
 
 @dataclass
@@ -154,6 +156,9 @@ def read_linkage(tr: Fields, file: str, name: str, gravity: float, analysis: boo
         seen.add(link.name)
     crank = _read_crank(tr.table("crank"), links, joints, math.radians(ref_deg), fields)
     outputs = tuple(_read_output(of, names, links) for of in tr.tables("outputs", required=False))
+    for k, out in enumerate(outputs):
+        if any(o.name == out.name for o in outputs[:k]):
+            raise ProblemError(file, tr.where(f"outputs[{k + 1}].name"), f"output {out.name!r} is named twice")
     loads = tuple(_read_load(lf, names, links) for lf in tr.tables("loads", required=False))
     linkage = Linkage(tuple(joints), tuple(links), crank, outputs, loads, gravity, file, name, fields)
     from .structure import analyse_structure
@@ -179,6 +184,13 @@ def _read_link(lf: Fields, names: list[str], joints: list[Joint], fields: dict) 
     name = lf.string("name")
     fields[f"link:{name}"] = lf.path
     js = tuple(_joint_names(lf, "joints", names))
+    at = {j.name: (j.x, j.y) for j in joints}
+    for i, a in enumerate(js):   # a link's joints apart: a link of length zero has no direction, no pose
+        for b in js[i + 1:]:
+            if math.dist(at[a], at[b]) < JOINTS_APART_M:
+                raise lf.error("joints", f"joints {a} and {b} of link {name} coincide ({math.dist(at[a], at[b]) * 1e3:.3g} "
+                                         f"mm apart at the reference pose, less than {JOINTS_APART_M * 1e3:g} mm): move "
+                                         "one of them")
     mass = lf.number("mass_kg", 0.0, min=0, max=1e4)              # 0: massless (kinetostatics of the rest)
     cg = lf.raw("cg_mm", None)
     line = lf.raw("cg_on_line", None)

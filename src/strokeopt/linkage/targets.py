@@ -154,8 +154,12 @@ def read_spec(problem, f: Fields) -> SynthesisSpec:
     angles = f.raw("angles_deg")
     speeds = f.raw("speeds_m_s")
     if not (isinstance(angles, list) and isinstance(speeds, list) and len(angles) == len(speeds) >= 3
-            and all(isinstance(v, (int, float)) for v in angles + speeds)):
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in angles + speeds)):
         raise f.error("speeds_m_s", "angles_deg and speeds_m_s must be arrays of numbers of one length (3 or more)")
+    for key, values in (("angles_deg", angles), ("speeds_m_s", speeds)):
+        bad = [i for i, v in enumerate(values) if not math.isfinite(v)]
+        if bad:
+            raise f.error(key, f"entry {bad[0] + 1} is {values[bad[0]]!r}: every target must be a finite number")
     rms_max = f.number("rms_max_m_s", min=0, max=10)
     fixed = f.raw("fixed_joints", [])
     fixed_joints = _joints(f, "fixed_joints", names, len(fixed)) if isinstance(fixed, list) and fixed else ()
