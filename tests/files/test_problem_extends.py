@@ -50,6 +50,9 @@ def test_extends_merges_tables_and_replaces_arrays(tmp_path):
     ('extends = "b.toml"\n', "cycle of extends: a.toml -> b.toml -> a.toml"),
     ('extends = "missing.toml"\n', "'missing.toml': no such file"),
     ("extends = 3\n", "must be the name of a problem file"),
+    # a NUL byte and a name too long for the file system ended in tracebacks (ValueError, OSError)
+    ('extends = "a\\u0000b.toml"\n', "holds a control character"),
+    ('extends = "' + "x" * 300 + '.toml"\n', "is no file name this system can open"),
 ])
 def test_bad_extends_is_one_line_exit_2(tmp_path, capsys, text, words):
     (tmp_path / "a.toml").write_text(text, encoding="utf-8")
@@ -60,6 +63,17 @@ def test_bad_extends_is_one_line_exit_2(tmp_path, capsys, text, words):
     assert main(["kinematics", str(tmp_path / "a.toml"), "--plot", "none"]) == 2
     out = capsys.readouterr().err.strip().splitlines()
     assert len(out) == 1 and "a.toml" in out[0] and "extends" in out[0] and words in out[0]
+
+
+def test_a_chain_of_eight_extends_is_read_and_nine_refused(tmp_path):
+    # it said "a chain of more than 8 extends" for a chain of 8
+    base = _copy(tmp_path)
+    names = [base.name] + [f"v{k}.toml" for k in range(1, 10)]
+    for k in range(1, 10):
+        (tmp_path / names[k]).write_text(f'extends = "{names[k - 1]}"\n', encoding="utf-8")
+    assert load_problem(tmp_path / "v8.toml").spm == load_problem(base).spm   # v8 -> v7 -> ... -> base: 8 extends
+    with pytest.raises(ProblemError, match="a chain of more than 8 extends"):
+        load_problem(tmp_path / "v9.toml")
 
 
 def test_a_base_with_an_error_is_named(tmp_path):

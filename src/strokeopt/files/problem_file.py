@@ -61,15 +61,22 @@ def read_problem_data(path: Path, chain: tuple[Path, ...] = ()) -> dict:
         return data
     if not isinstance(base, str) or not base.strip():
         raise ProblemError(file, "extends", f"must be the name of a problem file (a string), got {base!r}")
+    if any(ord(c) < 32 for c in base):
+        raise ProblemError(file, "extends", f"{base!r} holds a control character: a file name has none")
     base_path = (path.parent / base)
-    key = base_path.resolve()
+    try:
+        key = base_path.resolve()
+        found = base_path.exists()
+    except (OSError, ValueError) as exc:  # a name too long for the file system
+        raise ProblemError(file, "extends", f"{base[:60]!r}{'...' if len(base) > 60 else ''} is no file name this "
+                                            f"system can open: {exc.strerror or exc}") from None
     seen = chain + (path.resolve(),)
     if key in seen:
         names = " -> ".join(p.name for p in (*seen, key))
         raise ProblemError(file, "extends", f"{base!r} makes a cycle of extends: {names}")
-    if len(seen) >= EXTENDS_DEPTH_MAX:
+    if len(seen) > EXTENDS_DEPTH_MAX:  # seen: this file and those extending it; its base would be one more
         raise ProblemError(file, "extends", f"a chain of more than {EXTENDS_DEPTH_MAX} extends")
-    if not base_path.exists():
+    if not found:
         raise ProblemError(file, "extends", f"{base!r}: no such file (looked for {base_path})")
     return merge_tables(_omitted(read_problem_data(base_path, seen), omit, file, base), data)
 
