@@ -24,6 +24,11 @@ K2 = "model.springs.k2.stiffness_N_m"
     (f"{K2}=±95%", "beyond ±90 %"),
     (f"{K2}=±2000", "reaches -1100, which the problem refuses"),  # a negative spring rate: outside its range
     (f"{K2}=10%", "expected FIELD"),
+    # every sample had the design's rate: a yield for a scatter never simulated
+    ("machine.spm=±10%", "[machine] is the design's"),
+    ("timing.intervals[1].span_deg=±1", "[timing] is the design's"),
+    ("design.handover_accuracy_mm=±10%", "[design] is the design's"),
+    (f"{K2}=±1e-300", "changes no value of 900"),  # as 0 %: every sample the nominal machine
 ])
 def test_bad_tolerances_are_refused(capsys, text, words):
     assert main(["robust", str(REFERENCE), "--tolerance", text, "--samples", "8", "--workers", "1",

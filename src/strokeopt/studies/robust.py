@@ -91,6 +91,10 @@ def parse_tolerance(text: str, problem, option: str = "--tolerance") -> Toleranc
         raise ProblemError(option, field, f"±{100 * half:g} % is beyond ±{100 * RELATIVE_MAX:g} %: not the part the "
                                           "design was made for")
     tol = Tolerance(field, nominal, half, bool(m["pct"]), m["dist"] or "uniform")
+    if any(b == nominal for b in tol.bounds):  # +-1e-300 on 900 N/m: every sample the nominal machine
+        raise ProblemError(option, field, f"±{m['value']}{m['pct'] or ''} changes no value of {nominal:g}: every "
+                                          "sample would be the nominal machine")
+    check_applies([tol])
     for value in tol.bounds:  # both extremes must be values the problem file accepts
         try:
             problem.with_overrides([f"{field}={value!r}"])
@@ -130,6 +134,26 @@ def unit_samples(count: int, dims: int, method: str = "sobol", seed: int = 0) ->
     return qmc.LatinHypercube(dims, seed=seed).random(count)
 
 
+#: The tables whose numbers a sample cannot change: the design's stroke keeps its rate, its timing, its law and
+#: its settings (a sample judges the same stroke on another machine).
+FIXED_BY_DESIGN = ("machine", "timing", "motion", "design", "problem")
+
+
+def check_applies(tolerances: list[Tolerance], design=None) -> None:
+    """Refuse a tolerance the study cannot apply to a design's samples: a field of :data:`FIXED_BY_DESIGN`, or
+    (given the ``design``) the pulley of a design that chose its own (its teeth are the design's)."""
+    for t in tolerances:
+        table = t.field.split(".", 1)[0].split("[", 1)[0]
+        if table in FIXED_BY_DESIGN:
+            raise ProblemError("--tolerance", t.field, f"[{table}] is the design's: every sample judges the design's "
+                                                       "stroke as solved (its rate, timing, law and settings), so a "
+                                                       "scatter here would change nothing; solve a variant (--set) "
+                                                       "for another rate or timing")
+        if t.field.startswith("transmission.pulley_teeth") and design is not None and design.pulley_teeth is not None:
+            raise ProblemError("--tolerance", t.field, f"the design chose its own pulley ({design.pulley_teeth} teeth): "
+                                                       "a sample keeps it")
+
+
 def check_distinct(tolerances: list[Tolerance]) -> None:
     """One scatter per field (a second would overwrite the first in every sample): else ProblemError naming it."""
     seen: dict = {}
@@ -153,6 +177,7 @@ def robust_study(design, tolerances: list[Tolerance], samples: int = 1000, *, se
     if method not in METHODS:
         raise ProblemError("--method", "", f"{method!r} is not one of {', '.join(METHODS)}")
     check_distinct(tolerances)
+    check_applies(tolerances, design)
     u = unit_samples(samples, len(tolerances), method, seed)
     items = [(k, tuple(t.value(float(x)) for t, x in zip(tolerances, row))) for k, row in enumerate(u)]
     outcomes = run_study(_sample_step, items, (design, tuple(tolerances)), runner=runner, progress=progress,
