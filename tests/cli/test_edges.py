@@ -44,6 +44,8 @@ def test_argument_errors_under_json_print_the_failure_object(capsys, argv):
     out, err = capsys.readouterr()
     data = json.loads(out)
     assert exc.value.code == 2 and data["status"] == "bad input" and data["message"] and data["message"] in err
+    # one line, as without --json (the whole usage was printed before it)
+    assert len(err.strip().splitlines()) == 1 and "usage:" not in err and "--help" in err
 
 
 def test_a_screw_no_torque_can_drive_is_refused(capsys):

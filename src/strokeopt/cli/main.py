@@ -54,9 +54,8 @@ def _json_argument_errors(parser: argparse.ArgumentParser, argv: list[str]) -> N
         return
     subs = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
     for p in (parser, *subs.choices.values()):
-        def error(message: str, p=p):
-            p.print_usage(sys.stderr)
-            print(f"{p.prog}: error: {message}", file=sys.stderr)
+        def error(message: str, p=p):  # the same one line as without --json
+            print(f"{p.prog}: error: {message} (see {p.prog} --help)", file=sys.stderr)
             _emit(to_json({"status": "bad input", "message": message}))
             sys.exit(2)
 

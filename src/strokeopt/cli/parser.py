@@ -117,6 +117,8 @@ def build_parser() -> argparse.ArgumentParser:
                "Every --json report has a 'status': 'ok'; 'optimal' or 'acceptable' (solve: IPOPT's verdict); "
                "'infeasible' (size, a solve sweep: no candidate or rate passes); 'limits exceeded' (solve, accuracy: "
                "a limit is broken, exit 1); 'verification failed' (solve, verify: the stroke re-simulated in the contact model breaks a criterion, exit 1); "
+               "'implausible forces' (simulate: a peak force beyond what the scene's bodies and springs can load an "
+               "element with, the model taken where it does not hold, exit 1); "
                "'targets missed' (bench); 'failed' (a solve or an integration that did not succeed, exit 1) and "
                "'bad input' (exit 2), each with the 'message' stderr shows.",
     )
