@@ -9,6 +9,7 @@ eps_max = 4 h / T^2 = 80.6 rad/s^2, and min_peak_torque I0 eps_max = 106.0 N m; 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,6 +20,8 @@ from strokeopt.drive.load import load_torque
 from strokeopt.drive.transmission import Gearbox
 from strokeopt.errors import ProblemError
 from strokeopt.motion.laws import make_law
+
+SERVO_FILE = Path(__file__).resolve().parents[2] / "problems" / "loom_beatup_servo.toml"
 
 I0 = 13.42 * 9.80665 * 1e-2  # digest C: 13.42 kgf cm s^2 = 1.31605 kg m^2 (the digest: 1.3165, within 0.05 %)
 
@@ -250,3 +253,21 @@ def test_a_rotary_design_file_and_report_say_deg_and_rad(tmp_path, capsys):
     assert "stroke mm" not in html and "a_max m/s2" not in html and "v_max m/s" not in html
     tag = re.search(r'data-key="moves\[0\]\.stroke_deg" data-value="([^"]+)"', html)
     assert tag and float(tag.group(1)) == summary["moves"][0]["stroke_deg"]
+
+
+def test_kinematics_and_size_json_of_a_rotary_load_say_their_units(capsys):
+    # before: kinematics --json gave stroke_mm = 340.34 for a 19.5 deg stroke; size --json moving_mass_kg = 1.3165
+    # (kg m^2), contact_position_mm = 3.49 and stiffness_N_m = 165078 (N m/rad) for the beat-up
+    import json
+
+    from strokeopt.cli.main import main
+
+    assert main(["kinematics", str(SERVO_FILE), "--json", "--plot", "none"]) == 0
+    text = capsys.readouterr().out
+    assert json.loads(text)["moves"][0]["stroke_deg"] == pytest.approx(19.5) and "stroke_mm" not in text
+    main(["size", str(SERVO_FILE), "--json", "--plot", "none"])
+    inputs = json.loads(capsys.readouterr().out)["inputs"]
+    force = inputs["load_forces"][0]
+    assert inputs["moving_inertia_kg_m2"] == 1.3165 and "moving_mass_kg" not in inputs
+    assert (force["torque_N_m"], force["stiffness_N_m_rad"], force["contact_position_deg"]) == pytest.approx(
+        (0.0, 165078.0, 0.2))

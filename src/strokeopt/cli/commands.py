@@ -40,9 +40,8 @@ def cmd_kinematics(args) -> int:
         return cmd_linkage_kinematics(args)
     from ..report.motion import plot_kinematics
     from ..report.motion import kinematics_summary, kinematics_text
-    from ..report.format import to_json
-
-    from ..report.format import drive_text
+    from ..io.load_units import to_load_units
+    from ..report.format import drive_text, to_json
 
     problem = _load(args)
     stroke = args.design_stroke or problem.stroke()
@@ -52,8 +51,8 @@ def cmd_kinematics(args) -> int:
             if row.get("law") is not None:
                 row["law"] = stroke.label
     summary = {"status": "ok", **summary, "drive": drive_used(args, problem)}
-    if args.json:
-        _emit(to_json(summary))
+    if args.json:  # a rotary load's keys and positions in deg (io/load_units.py), as design.json's
+        _emit(to_json(to_load_units(summary, problem.timing.rotary)))
     else:
         print(kinematics_text(summary))
         print(drive_text(summary["drive"]))

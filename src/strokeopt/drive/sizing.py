@@ -289,13 +289,16 @@ def size_drive(problem, spm: float | None = None, *, catalogue=None, motors=None
         it = progress(cands) if progress is not None else cands
         for c in it:
             c.max_spm, c.max_spm_binding = max_spm(kin, spm, c.motor, c.pulley, spec.load, spec.limits, belt, resolution)
+    rotary = problem.timing.rotary  # a rotary load's keys say its units: kg m^2, N m, N m/rad, deg
     inputs = {
-        "moving_mass_kg": spec.load.moving_mass,  # kg m^2 for a rotary load (load_unit "rad")
+        ("moving_inertia_kg_m2" if rotary else "moving_mass_kg"): spec.load.moving_mass,
         "load_unit": problem.timing.unit,
         "gravity_m_s2": spec.load.gravity,
         "load_forces": [{"name": f.name, "kind": f.kind, "direction": "up" if f.direction > 0 else "down",
-                         "force_N": f.force, "stiffness_N_m": f.stiffness,
-                         "contact_position_mm": f.contact_position * 1e3} for f in spec.load.forces],
+                         **({"torque_N_m": f.force, "stiffness_N_m_rad": f.stiffness,
+                             "contact_position_deg": math.degrees(f.contact_position)} if rotary else
+                            {"force_N": f.force, "stiffness_N_m": f.stiffness,
+                             "contact_position_mm": f.contact_position * 1e3})} for f in spec.load.forces],
         "peak_limit_pct": spec.limits.peak_limit_pct,
         "max_inertia_ratio": spec.limits.max_inertia_ratio,
         "belt": belt.belt.name if belt else None,

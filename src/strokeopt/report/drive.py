@@ -57,10 +57,10 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
     with_max_spm = sizing.max_spm_resolution is not None
     inp = report["inputs"]
     if inp.get("load_unit") == "rad":  # a rotary load (report/units.py): inertia, torques, angles
-        forces = "; ".join(f"{f['name']} ({f['kind']}, {f['force_N']:g} N m + {f['stiffness_N_m']:g} N m/rad "
-                           f"beyond {math.degrees(f['contact_position_mm'] * 1e-3):g} deg, pushing "
+        forces = "; ".join(f"{f['name']} ({f['kind']}, {f['torque_N_m']:g} N m + {f['stiffness_N_m_rad']:g} N m/rad "
+                           f"beyond {f['contact_position_deg']:g} deg, pushing "
                            f"towards {direction_word(f['direction'], True)} angles)" for f in inp["load_forces"]) or "none"
-        load = f"load: moving inertia {inp['moving_mass_kg']:g} kg m^2 (rotary, gravity off), load torques: {forces}"
+        load = f"load: moving inertia {inp['moving_inertia_kg_m2']:g} kg m^2 (rotary, gravity off), load torques: {forces}"
     else:
         forces = "; ".join(f"{f['name']} ({f['kind']}, {f['force_N']:g} N + {f['stiffness_N_m']:g} N/m "
                            f"beyond {f['contact_position_mm']:g} mm, pushing {f['direction']})"
@@ -242,7 +242,7 @@ def stepper_text(sizing, report: dict, explain: bool = False) -> str:
         f"{report['problem']} at {cycle_of(report).rate(report['spm'])} "
         f"({period_text(report['cycle_time_s'], report['spm'], report)}, "
         f"{inp['law']}, {inp['samples']} samples over the whole cycle)",
-        f"load: {inp['moving_mass_kg']:g} kg at the load, gravity {inp['gravity_m_s2']:g} m/s^2; members: "
+        f"load: {inp.get('moving_mass_kg', inp.get('moving_inertia_kg_m2')):g} kg at the load, gravity {inp['gravity_m_s2']:g} m/s^2; members: "
         + ("; ".join(f"{m.name} ({m.inertia:g} {units[m.stage]} on the {m.stage})" for m in sizing.load.members)
            or "none"),
         f"checks: torque demand T = J(phi) phi'' + 1/2 J'(phi) phi'^2 + loads under the pull-out curve / "
