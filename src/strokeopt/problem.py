@@ -224,8 +224,9 @@ def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagra
     # +-100 turns, strokes up to 100 turns (a sley swings 19.5 deg, an indexing table a turn)
     lim = 1e5 if unit == "m" else 36000.0
     position = f.number(f"start_position_{ukey}", min=-lim, max=lim) * to_si
-    if len(rows) < 2:
-        raise f.error("intervals", f"needs at least two intervals (a move and a dwell), got {len(rows)}")
+    if len(rows) < 2 and not (len(rows) == 1 and rows[0].has("end") and rows[0].raw("end") == "speed"):
+        raise f.error("intervals", f"needs at least two intervals (a move and a dwell; one move only where it ends "
+                                   f"at speed, a crank turning), got {len(rows)}")
     intervals = []
     n_moves = 0
     for row in rows:
@@ -236,6 +237,8 @@ def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagra
         published = row.number("published_time_s", None, min=0.0, max=3600.0) if times == "nominal" else \
             row.number("published_time_s", positive=True, max=3600.0)
         handover = row.boolean("handover", False)
+        # a move's end: at rest (a dwell or a stop follows) or at speed (the next move starts at it)
+        end_speed = row.string("end", "rest", choices=("rest", "speed")) == "speed" if stroke > 0 else False
         if stroke > 0:
             if span < MOVE_SPAN_MIN_DEG:
                 raise row.error("span_deg", f"a move ({stroke / to_si:g} {ukey}) needs a span of at least "
@@ -246,7 +249,7 @@ def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagra
             signed = stroke if direction == "up" else -stroke
             move_index = n_moves
         else:
-            for key in ("direction", "law", *LAW_PARAMETERS):
+            for key in ("direction", "law", "end", *LAW_PARAMETERS):
                 if row.has(key):
                     raise row.error(key, f"a dwell (stroke_{ukey} = 0) has no " + key)
             if handover:
@@ -254,7 +257,7 @@ def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagra
             law, signed, move_index = None, 0.0, None
         row.finish()
         intervals.append(Interval(len(intervals) + 1, name, span, position, position + signed, law,
-                                  published, handover, move_index))
+                                  published, handover, move_index, end_speed))
         position += signed
     total = sum(i.span_deg for i in intervals)
     if abs(total - 360.0) > 1e-6:
@@ -268,17 +271,25 @@ def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagra
                 raise row.error("span_deg", f"{i.span_deg:g} deg, but interval_times = \"published\" takes the span "
                                             f"from published_time_s: {implied:.2f} deg; change both, or set "
                                             f"timing.interval_times = \"nominal\" to use the spans")
+    for k, itv in enumerate(intervals):   # a move at speed hands it to a move, never to a dwell
+        after = intervals[(k + 1) % len(intervals)]
+        if itv.end_speed and not after.is_move:
+            raise rows[k].error("end", f"\"speed\": the interval after {itv.name!r} is the dwell {after.name!r}, which "
+                                       "starts at rest; end = \"rest\", or make the next interval a move")
+    # a crank turning once a cycle advances a turn: its positions close the cycle modulo it
+    advance = f.number("advance_deg", 0.0, min=-36000.0, max=36000.0) * to_si if unit == "rad" else 0.0
     start = intervals[0].start_position
-    if abs(position - start) > 1e-9:
+    if abs(position - start - advance) > 1e-9:
+        moved = f" + advance_deg {advance / to_si:g}" if advance else ""
         raise f.error("intervals", f"the strokes do not close the cycle: the last interval ends at {position / to_si:g} "
-                                   f"{ukey}, the first starts at {start / to_si:g} {ukey} (a move missing, or a direction "
-                                   "wrong?)")
+                                   f"{ukey}, the first starts at {start / to_si:g}{moved} {ukey} (a move missing, or a "
+                                   "direction wrong?)")
     if n_moves == 0:
         raise f.error("intervals", f"has no move (every stroke_{ukey} is 0)")
     if sum(i.handover for i in intervals) > 1:
         raise f.error("intervals", "more than one interval is marked handover = true")
     f.finish()
-    return TimingDiagram(tuple(intervals), revs, times, unit)
+    return TimingDiagram(tuple(intervals), revs, times, unit, advance)
 
 
 def unit_key(unit: str) -> str:

@@ -167,3 +167,19 @@ def test_the_servo_on_the_crank_is_designed_through_the_one_pipeline(tmp_path, c
     report = json.loads(capsys.readouterr().out)
     assert report["status"] == "optimal" and report["drive"]["transmission"] == "linkage"
     assert (out / "design.json").exists() and (out / "cam_table.csv").exists()
+
+
+def test_in_crank_coordinates_the_load_is_the_crank_and_the_torque_the_linkage_s_own():
+    # coordinates = "crank": the design states the crank's angle (it turns through the output's extremes); at
+    # constant crank speed over the whole turn, the beat-up included, the torque is the power balance's
+    problem = load_linkage_file(LOOM)
+    tr = LinkageTransmission(problem.linkage, "sley_angle", ratio=2.0, coordinates="crank")
+    assert tr.load_unit == "rad" and tr.crank_range is None and tr.range_error(-10.0, 10.0) is None
+    kin = kinematics_of(problem.linkage)
+    cycle = kin.solve(720)
+    w = problem.omega
+    dyn = analyse_dynamics(kin, cycle, w)
+    theta = cycle.theta
+    terms = load_torque(0.0, tr, Load(0.0), theta, w + 0 * theta, 0 * theta)
+    np.testing.assert_allclose(terms.phi, 2.0 * (theta - tr.theta_ref), atol=1e-12)
+    np.testing.assert_allclose(terms.total, dyn.torque / 2.0, atol=1e-7 * np.abs(dyn.torque).max())

@@ -37,6 +37,10 @@ from .kinematics import kinematics_of
 from .model import Linkage
 from .series import Series
 
+#: What the design states the motion of: one of the linkage's outputs (the crank oscillates on one branch), or
+#: the crank itself (it turns, at the speed the design gives it: the hybrid).
+COORDINATES = ("output", "crank")
+
 #: Largest error of a series between its samples against the exact closure, relative to the function's
 #: largest value (its swing for the output): above it the linkage is refused (more ``angles`` a turn).
 FIT_TOLERANCE = 1e-8
@@ -92,13 +96,16 @@ class LinkageTransmission(Transmission):
         return read_linkage_transmission(cls, fields, timing)
 
     def __init__(self, linkage: Linkage, output: str, ratio: float = 1.0, gear_inertia: float = 0.0,
-                 samples: int = 720, crank_range: tuple[float, float] | None = None):
+                 samples: int = 720, crank_range: tuple[float, float] | None = None, coordinates: str = "output"):
         if not (ratio > 0 and math.isfinite(ratio)) or not (gear_inertia >= 0 and math.isfinite(gear_inertia)):
             raise ValueError("need a positive ratio and a gearbox inertia of zero or more")
+        if coordinates not in COORDINATES:
+            raise ValueError(f"coordinates must be one of {COORDINATES}")
         out = next(o for o in linkage.outputs if o.name == output)
         self.linkage, self.output, self.samples = linkage, output, int(samples)
+        self.coordinates = coordinates
         self.ratio, self.inertia = float(ratio), float(gear_inertia)  # the links' inertia varies: inertia_at
-        self.load_unit = "rad" if out.kind == "angle" else "m"
+        self.load_unit = "rad" if out.kind == "angle" or coordinates == "crank" else "m"
         self.theta_ref = linkage.crank.reference_angle
         self.fit = fit_linkage(linkage, output, self.samples)
         if self.fit.error > FIT_TOLERANCE:
@@ -106,6 +113,9 @@ class LinkageTransmission(Transmission):
                              f"{self.samples} samples a turn; more samples (angles) resolve it")
         self._dy, self._dJ = self.fit.y.derivative(), self.fit.J.derivative()
         self._d2y = self._dy.derivative()
+        if coordinates == "crank":  # the load is the crank itself: it turns, no branch
+            self.branch = self.crank_range = None
+            return
         self.branch = self._branch()
         self.crank_range = self._working_range() if crank_range is None else self._within_branch(crank_range)
 
@@ -159,9 +169,13 @@ class LinkageTransmission(Transmission):
         return self.theta_ref + phi / self.ratio
 
     def position(self, phi):
+        if self.coordinates == "crank":
+            return self.crank_angle(phi)
         return self.fit.y(self.crank_angle(phi))
 
     def chain(self):
+        if self.coordinates == "crank":
+            return [("crank", self.crank_angle, "rad")]
         return [("crank", self.crank_angle, "rad"), ("load", self.fit.y, self.load_unit)]
 
     def _inverse_grid(self) -> tuple[np.ndarray, np.ndarray]:
@@ -178,11 +192,15 @@ class LinkageTransmission(Transmission):
 
     def inverse_position(self, x):
         """On the branch: a cubic spline of the crank angle over the output, then one Newton step on the series."""
+        if self.coordinates == "crank":
+            return self.ratio * (x - self.theta_ref)
         theta = self._inverse_guess()(x)
         theta = theta - (self.fit.y(theta) - x) / self._dy(theta)
         return self.ratio * (theta - self.theta_ref)
 
     def range_error(self, x_min: float, x_max: float) -> str | None:
+        if self.coordinates == "crank":
+            return None
         ends = sorted(float(self.fit.y(t)) for t in self.crank_range)
         scale = 1e3 if self.load_unit == "m" else 180 / math.pi
         unit = "mm" if self.load_unit == "m" else "deg"
@@ -195,16 +213,21 @@ class LinkageTransmission(Transmission):
         return None
 
     def smallest_index(self) -> float:
-        """The smallest transmission index of the linkage over the crank range."""
+        """The smallest transmission index of the linkage over the crank range (a turning crank: the whole turn)."""
+        if self.crank_range is None:
+            return float(self.fit.index.min())
         th = self.fit.theta
         a, b = self.crank_range
         inside = ((th - a) % (2 * math.pi)) <= (b - a)
         return float(self.fit.index[inside].min()) if inside.any() else float(self.fit.index.min())
 
     def facts(self):
-        a, b = (math.degrees(t) for t in self.crank_range)
-        return [("linkage output (the load)", self.output), ("gear ratio [motor turns per crank turn]", self.ratio),
-                ("crank range [deg]", f"{a:.4g} to {b:.4g}"),
+        if self.coordinates == "crank":
+            where = [("the load", "the crank (its angle designed; it turns)")]
+        else:
+            a, b = (math.degrees(t) for t in self.crank_range)
+            where = [("linkage output (the load)", self.output), ("crank range [deg]", f"{a:.4g} to {b:.4g}")]
+        return where + [("gear ratio [motor turns per crank turn]", self.ratio),
                 ("series of the closure [harmonics; largest relative error]",
                  f"{self.fit.y.harmonics}; {self.fit.error:.1e}")]
 
@@ -226,11 +249,15 @@ class LinkageTransmission(Transmission):
     # numbers: the series in numpy, without a CasADi call per sample
     def transfer(self, phi):
         theta, i = self.crank_angle(np.asarray(phi, dtype=float)), self.ratio
+        if self.coordinates == "crank":
+            return theta, np.full_like(theta, 1 / i), np.zeros_like(theta)
         return self.fit.y(theta), self._dy(theta) / i, self._d2y(theta) / i**2
 
     def motor_angle(self, x):
         """On the branch: linear interpolation of the sampled output, then Newton steps on the series."""
         x = np.asarray(x, dtype=float)
+        if self.coordinates == "crank":
+            return self.ratio * (x - self.theta_ref)
         grid_x, grid_theta = self._inverse_grid()
         theta = np.interp(x, grid_x, grid_theta)
         for _ in range(4):
@@ -253,7 +280,11 @@ def read_linkage_transmission(cls, fields, timing) -> LinkageTransmission:
     ratio = fields.number("ratio", 1.0, min=0.1, max=1000.0)
     gear = fields.number("gear_inertia_kg_cm2", 0.0, min=0.0, max=1e6) * 1e-4
     gravity = fields.number("gravity_m_s2", 0.0, min=0.0, max=20.0)
+    coordinates = fields.string("coordinates", "output", choices=COORDINATES)
     crank_range = fields.raw("crank_range_deg", None)
+    if coordinates == "crank" and crank_range is not None:
+        raise fields.error("crank_range_deg", "is the branch an output's motion keeps to; with coordinates = "
+                                              "\"crank\" the crank turns")
     if crank_range is not None and not (isinstance(crank_range, list) and len(crank_range) == 2 and
                                         all(isinstance(c, (int, float)) and math.isfinite(c) for c in crank_range)
                                         and 0 < abs(crank_range[1] - crank_range[0]) < 360):
@@ -264,14 +295,16 @@ def read_linkage_transmission(cls, fields, timing) -> LinkageTransmission:
         raise fields.error("outputs", "a linkage that drives a load names it: add [[transmission.outputs]]")
     output = fields.string("output", names[0], choices=tuple(names))
     kind = next(o.kind for o in linkage.outputs if o.name == output)
-    unit = "rad" if kind == "angle" else "m"
+    unit = "rad" if kind == "angle" or coordinates == "crank" else "m"
+    if coordinates == "crank" and unit != timing.unit:
+        raise fields.error("coordinates", "\"crank\": [timing] states the crank's angles in deg, not positions in mm")
     if unit != timing.unit:
         raise fields.error("output", f"{output!r} is {'an angle' if unit == 'rad' else 'a length (' + kind + ')'}: "
                                      f"[timing] states its positions in {'deg' if unit == 'rad' else 'mm'}, not in "
                                      f"{'deg' if timing.unit == 'rad' else 'mm'}")
     try:
         tr = cls(linkage, output, ratio, gear, angles,
-                 None if crank_range is None else tuple(math.radians(c) for c in crank_range))
+                 None if crank_range is None else tuple(math.radians(c) for c in crank_range), coordinates)
     except ValueError as exc:
         raise fields.error("crank_range_deg" if crank_range is not None and "branch" in str(exc) else "angles",
                            str(exc)) from None

@@ -44,6 +44,9 @@ class Interval:
     published_time_s: float | None = None
     handover: bool = False  # the move that ends at the handover position
     move_index: int | None = None  # 1-based among the moves
+    #: the move ends at speed: the next interval is a move that starts at it (speed and, with the design's rest
+    #: order, acceleration continuous across the joint); False: at rest (a dwell or a stop follows)
+    end_speed: bool = False
 
     @property
     def is_move(self) -> bool:
@@ -81,6 +84,9 @@ class TimingDiagram:
     #: the SI unit of the load's positions: "m" (a linear load, the file in mm) or "rad" (a rotary load such
     #: as a sley on its shaft, the file in deg); the design's equations are the same for both
     unit: str = "m"
+    #: how far the load advances in one cycle (SI): 0 for a reciprocating load, a turn (2 pi) for a crank that
+    #: turns once a cycle; the positions of the next cycle are this cycle's plus it
+    advance: float = 0.0
 
     @property
     def rotary(self) -> bool:
@@ -89,6 +95,15 @@ class TimingDiagram:
     @property
     def moves(self) -> tuple[Interval, ...]:
         return tuple(i for i in self.intervals if i.is_move)
+
+    def starts_at_speed(self, interval: Interval) -> bool:
+        """Whether ``interval`` (a move) starts at speed: the interval before it (cyclically) ends at speed."""
+        return self.intervals[interval.index - 2].end_speed
+
+    @property
+    def at_speed(self) -> bool:
+        """Whether any move joins the next at speed."""
+        return any(i.end_speed for i in self.intervals)
 
     @property
     def position_range(self) -> tuple[float, float]:

@@ -49,6 +49,8 @@ def torque_lower_bound(req, motor) -> tuple[float, int] | None:
     j, m = motor.rotor_inertia + float(drive.pulley_inertia(2 * lo)), load.moving_mass
     best = None
     for mv in req.moves:
+        if mv.start_speed or mv.end_speed:  # the bound is a rest-to-rest move's: one at speed may not accelerate
+            continue
         a = least_peak_acceleration(abs(mv.stroke), mv.duration, mv.jerk_bound)
         slope = m * a - f_max
         r = hi if slope <= 0 else min(max(math.sqrt(j * a / slope), lo), hi)

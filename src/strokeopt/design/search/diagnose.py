@@ -109,6 +109,8 @@ def jerk_shortfall(req: SolveRequest) -> str | None:
     if req.settings.rest_order < 2:
         return None
     for mv in req.moves:
+        if mv.start_speed or mv.end_speed:  # the least jerk is a rest-to-rest move's
+            continue
         need = REST_TO_REST_JERK * abs(mv.stroke) / mv.duration**3
         if mv.jerk_bound is not None and mv.jerk_bound < need * (1 - 1e-9):
             return (f"move {mv.index} too short at {req.spm:g} spm: jerk bound needs at least {need:.4g} m/s^3 "

@@ -201,26 +201,49 @@ def add_moves(g: Graph) -> None:
         s_lb[0] = s_ub[0] = 0.0
         s_lb[-1] = s_ub[-1] = 1.0  # the end position is met exactly (the handover, for the handover move)
         v_lb, v_ub = np.full(n + 1, -np.inf), np.full(n + 1, np.inf)
-        v_lb[[0, -1]] = v_ub[[0, -1]] = 0.0
+        at_rest = [i for i, speed in ((0, mv.start_speed), (-1, mv.end_speed)) if not speed]  # an end at speed: free
+        v_lb[at_rest] = v_ub[at_rest] = 0.0
         S = b.var(f"S{mv.index}", (n + 1, 1), s_lb, s_ub, lambda r, k=k: r.start[k][0])
         V = b.var(f"V{mv.index}", (n + 1, 1), v_lb, v_ub, lambda r, k=k: r.start[k][1])
         rest = settings.rest_order >= 2
-        a0 = b.var(f"a0_{mv.index}", (1, 1), 0.0 if rest else -np.inf, 0.0 if rest else np.inf,
-                   0.0 if rest else (lambda r, k=k: r.start[k][2][0, 0]))
+        rest0 = rest and not mv.start_speed
+        a0 = b.var(f"a0_{mv.index}", (1, 1), 0.0 if rest0 else -np.inf, 0.0 if rest0 else np.inf,
+                   0.0 if rest0 else (lambda r, k=k: r.start[k][2][0, 0]))
         a_lb, a_ub = np.full((n, d), -np.inf), np.full((n, d), np.inf)
-        if rest:
+        if rest and not mv.end_speed:
             a_lb[-1, -1] = a_ub[-1, -1] = 0.0
         Acol = b.var(f"A{mv.index}", (n, d), a_lb, a_ub, lambda r, k=k: r.start[k][2][:, 1:])
         x = MoveVariables(mesh, S, V, a0, Acol)
         g.vars.append(x)
         b.constrain(f"move {mv.index} collocation", x.defects(), 0.0, 0.0)
-        if settings.rest_order >= 3:
-            b.constrain(f"move {mv.index} rest (jerk)", ca.vertcat(x.at([0.0], "j")[0, 0], x.at([1.0], "j")[-1, 0]),
-                        0.0, 0.0)
+        ends = [e for e, speed in ((x.at([0.0], "j")[0, 0], mv.start_speed), (x.at([1.0], "j")[-1, 0], mv.end_speed))
+                if not speed]
+        if settings.rest_order >= 3 and ends:
+            b.constrain(f"move {mv.index} rest (jerk)", ca.vertcat(*ends), 0.0, 0.0)
         if settings.rest_order >= 3 or req.objective == "min_snap":
             b.constrain(f"move {mv.index} jerk continuity", x.jerk_joints(), 0.0, 0.0)
         for lim in MOVE_LIMITS:
             lim.on_move(g, k)
+    add_speed_joints(g)
+
+
+def add_speed_joints(g: Graph) -> None:
+    """Where a move ends at speed (timing: end = "speed"), the next move (cyclically) starts with the same speed,
+    and with the same acceleration (rest order 2) and jerk (rest order 3) as the design holds them at a dwell:
+    each derivative in SI, over the larger of the two moves' scales."""
+    moves, order = g.request.moves, g.request.settings.rest_order
+    for k, mv in enumerate(moves):
+        if not mv.end_speed:
+            continue
+        j = (k + 1) % len(moves)
+        nxt = moves[j]
+        rows = []
+        for power, kind in ((1, "v"), (2, "a"), (3, "j"))[:max(order, 1)]:
+            end = g.vars[k].at([1.0], kind)[-1, 0] * mv.stroke / g.T[k] ** power
+            start = g.vars[j].at([0.0], kind)[0, 0] * nxt.stroke / g.T[j] ** power
+            scale = ca.fmax(abs(mv.stroke) / g.T[k] ** power, abs(nxt.stroke) / g.T[j] ** power)
+            rows.append((end - start) / scale)
+        g.built.constrain(f"move {mv.index} -> move {nxt.index} at speed", ca.vertcat(*rows), 0.0, 0.0)
 
 
 def build_graph(req: SolveRequest, pins: tuple) -> Graph:
@@ -245,7 +268,7 @@ def structure_key(req: SolveRequest) -> tuple:
     solver (their numbers differ). The error terms enter by type and parameters (they compare by value)."""
     choice = req.choice
     return (repr(req.settings), req.mesh, req.objective, req.relaxed, tuple(req.error_terms),
-            req.enforce_accuracy, tuple(mv.jerk_bound is None for mv in req.moves),
+            req.enforce_accuracy, tuple((mv.jerk_bound is None, mv.start_speed, mv.end_speed) for mv in req.moves),
             None if choice is None else tuple(m.name for m in choice.candidates),
             req.drive is not None and req.drive.belt is None)
 

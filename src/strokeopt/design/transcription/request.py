@@ -38,6 +38,8 @@ class Move:
     start: float  # position [m]
     stroke: float  # signed [m]
     jerk_bound: float | None  # [m/s^3]
+    start_speed: bool = False  # starts at the speed the move before it ends at (timing: end = "speed")
+    end_speed: bool = False  # ends at speed: the next move starts at it
 
     @property
     def v_scale(self) -> float:
@@ -74,8 +76,8 @@ def design_moves(problem, spm: float, settings: DesignSettings) -> list[Move]:
                                    f"the motion law {itv.law.label} of move {itv.move_index} has unbounded jerk; "
                                    "give jerk_max_m_s3 instead")
             bound = c_j * abs(itv.stroke) / law_dur**3
-        out.append(Move(itv.move_index, itv.index, itv.name,
-                        float(t0), float(dur), itv.start_position, itv.stroke, bound))
+        out.append(Move(itv.move_index, itv.index, itv.name, float(t0), float(dur), itv.start_position, itv.stroke,
+                        bound, problem.timing.starts_at_speed(itv), itv.end_speed))
     return out
 
 
