@@ -131,8 +131,9 @@ def require_belt_drive(problem, command: str) -> None:
     if name != "belt_pulley":
         raise ProblemError(str(problem.file), "transmission.type",
                            f"is {name!r}; strokeopt {command} searches the rates of a belt drive (motor, pulley and belt "
-                           f"span): it needs transmission.type = \"belt_pulley\" with pulley_teeth (strokeopt accuracy "
-                           f"judges the servo loop of a gearbox drive too)")
+                           f"span): it needs transmission.type = \"belt_pulley\" with pulley_teeth"
+                           + (" (strokeopt accuracy judges the servo loop of a gearbox drive too)" if name == "gearbox"
+                              else ""))
 
 
 def step_angle(problem) -> float | None:

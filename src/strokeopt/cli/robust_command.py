@@ -52,6 +52,7 @@ def cmd_robust(args) -> int:
     from ..design.result import design_from_data
     from ..io.plain import to_json
     from ..report.robust import plot_robust, robust_text
+    from ..io.load_units import error_unit
     from ..studies.robust import SAMPLES_RANGE, check_distinct, parse_tolerance, robust_study
     from ..studies.runner import study_runner
     from ..studies.verified import solve_verified
@@ -78,7 +79,8 @@ def cmd_robust(args) -> int:
     else:
         print(robust_text(report))
     contact = getattr(design.settings, "contact", None)
-    limits = {"handover_error_mm": None if design.settings is None else design.settings.accuracy * 1e3,
+    scale, unit = error_unit(design.problem.timing.rotary)   # the accuracy in the handover error's unit
+    limits = {f"handover_error_{unit}": None if design.settings is None else design.settings.accuracy * scale,
               "impact_velocity_m_s": None if contact is None else contact.impact_velocity_max}
     _write_figure(lambda p: plot_robust(report, p, limits), _plot_path(args, "robust", spm_tag(design.spm)), args)
     errors = [r for r in report["rows"] if r.get("error")]

@@ -444,3 +444,10 @@ def _number_list(f: Fields, key: str, integer: bool = False) -> list[float]:
             raise f.error(key, f"element {i} must be a whole number, got {v!r}")
         out.append(float(v))
     return out
+
+
+def own_motors(catalogue_files, catalogue) -> list[str]:
+    """The servo motors a problem's own catalogue files add (``[drive] catalogues``), else every servo motor of
+    ``catalogue``: the motors a motor-and-gearbox choice tries."""
+    own = load_catalogue(list(catalogue_files), builtin=False).motors if catalogue_files else {}
+    return list(own) or list(catalogue.motors)

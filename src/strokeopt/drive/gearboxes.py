@@ -66,12 +66,3 @@ def choose_smallest(fits: list, rated, rms):
     """The pair to choose among ``fits`` (those that carry the cycle): the smallest motor (least ``rated(c)``
     torque), then the least ``rms(c)`` torque; None when nothing fits."""
     return min(fits, key=lambda c: (rated(c), rms(c))) if fits else None
-
-
-def own_motors(catalogue_files, catalogue) -> list[str]:
-    """The servo motors a problem's own catalogue files add (``[drive] catalogues``), else every servo motor of
-    ``catalogue``: the motors a motor-and-gearbox choice tries."""
-    from .catalogue import load_catalogue
-
-    own = load_catalogue(list(catalogue_files), builtin=False).motors if catalogue_files else {}
-    return list(own) or list(catalogue.motors)

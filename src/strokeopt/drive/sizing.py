@@ -290,6 +290,10 @@ def size_drive(problem, spm: float | None = None, *, catalogue=None, motors=None
         for c in it:
             c.max_spm, c.max_spm_binding = max_spm(kin, spm, c.motor, c.pulley, spec.load, spec.limits, belt, resolution)
     rotary = problem.timing.rotary  # a rotary load's keys say its units: kg m^2, N m, N m/rad, deg
+    own = {}
+    if getattr(problem.transmission, "carries_load", False):  # a linkage's links: their inertia on the motor shaft
+        j = np.ravel(problem.transmission.inertia_at(problem.transmission.motor_angle(kin.s)))
+        own = {"transmission_inertia_kg_m2": [float(j.min()), float(j.max())]}
     inputs = {
         ("moving_inertia_kg_m2" if rotary else "moving_mass_kg"): spec.load.moving_mass,
         "load_unit": problem.timing.unit,
@@ -299,6 +303,7 @@ def size_drive(problem, spm: float | None = None, *, catalogue=None, motors=None
                              "contact_position_deg": math.degrees(f.contact_position)} if rotary else
                             {"force_N": f.force, "stiffness_N_m": f.stiffness,
                              "contact_position_mm": f.contact_position * 1e3})} for f in spec.load.forces],
+        **own,
         "peak_limit_pct": spec.limits.peak_limit_pct,
         "max_inertia_ratio": spec.limits.max_inertia_ratio,
         "belt": belt.belt.name if belt else None,

@@ -21,6 +21,7 @@ import casadi as ca
 import numpy as np
 
 from .._casadi import evaluate
+from ..errors import ProblemError
 from ..io.fields import _REQUIRED
 
 
@@ -463,7 +464,12 @@ def check_reach(tr: Transmission, fields, key: str, timing, remedy: str) -> None
     leave (:meth:`Transmission.range_error`); ``remedy`` says what to change."""
     why = tr.range_error(*timing.position_range)
     if why is not None:
-        raise fields.error(key, f"the strokes of [timing] reach beyond the {tr.label}'s range: {why}; {remedy}")
+        message = f"the strokes of [timing] reach beyond the {tr.label}'s range: {why}; {remedy}"
+        # the --set that moved the positions, unless the transmission's own field was set too
+        moved = sorted(f for f in fields.overridden if f.startswith("timing."))
+        if moved and fields.where(key) not in fields.overridden:
+            raise ProblemError(fields.file, moved[0], f"{message} (value from --set)")
+        raise fields.error(key, message)
 
 
 #: The lever angle a screw-lever transmission may reach [deg] (both arms): tan() of the sleeve arm

@@ -102,14 +102,14 @@ def load_linkage_file(path, overrides: list[str] | None = None, check_cycle: boo
         try:
             kinematics_of(linkage).solve(problem.angles)
         except ProblemError as exc:
-            raise _blame_the_set(exc, data, overridden) from None
+            raise blame_the_set(exc, data, overridden) from None
     return problem
 
 
 GEOMETRY_KEYS = ("x_mm", "y_mm", "reference_angle_deg")
 
 
-def _blame_the_set(exc: ProblemError, data: dict, overridden: frozenset) -> ProblemError:
+def blame_the_set(exc: ProblemError, data: dict, overridden: frozenset) -> ProblemError:
     """A geometry refused by the kinematics after a --set of a joint's coordinate (or the reference angle):
     the error names the field the user set and the joint it moves, then the links and the angle where the
     chain fails; without such a --set, the error as the kinematics made it (the first link of the group)."""

@@ -19,9 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..drive.catalogue import RPM, SHIPPED_FILES, load_catalogue, resolve_catalogue_file
+from ..drive.catalogue import RPM, SHIPPED_FILES, load_catalogue, own_motors, resolve_catalogue_file
 from ..drive.checks import Check, DriveLimits, binding_check, build_checks, cycle_values
-from ..drive.gearboxes import GearboxEntry, choose_smallest, gearbox_catalogue_file, load_gearboxes, own_motors
+from ..drive.gearboxes import GearboxEntry, choose_smallest, gearbox_catalogue_file, load_gearboxes
 from ..errors import ProblemError
 from .dynamics import Dynamics
 

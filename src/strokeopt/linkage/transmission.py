@@ -32,6 +32,7 @@ import numpy as np
 
 from ..drive.crank_slider import DEAD_CENTRE_MARGIN_DEG
 from ..drive.transmission import Transmission, check_reach
+from ..errors import ProblemError
 from .dynamics import load_magnitude, reduced_terms
 from .kinematics import kinematics_of
 from .model import Linkage
@@ -155,12 +156,15 @@ class LinkageTransmission(Transmission):
     def _within_branch(self, crank_range) -> tuple[float, float]:
         a, b = sorted(float(c) for c in crank_range)
         lo, hi = self.branch
+        margin = math.radians(DEAD_CENTRE_MARGIN_DEG)
         shift = 2 * math.pi * round((0.5 * (a + b) - 0.5 * (lo + hi)) / (2 * math.pi))
         a, b = a - shift, b - shift
-        if not (lo <= a and b <= hi):
-            raise ValueError(f"{math.degrees(a + shift):.4g}..{math.degrees(b + shift):.4g} deg leaves the branch of "
-                             f"the output between its extremes at {math.degrees(lo):.4g} and {math.degrees(hi):.4g} deg "
-                             "of crank, where the output turns back")
+        if not (lo + margin <= a + 1e-9 and b - 1e-9 <= hi - margin):
+            raise ValueError(f"{math.degrees(a + shift):.6g}..{math.degrees(b + shift):.6g} deg of crank: the branch "
+                             f"keeps {DEAD_CENTRE_MARGIN_DEG:g} deg from the output's extremes at "
+                             f"{math.degrees(lo + shift):.6g} and {math.degrees(hi + shift):.6g} deg (where it turns back "
+                             f"and the motor speed of an output speed has no bound): within "
+                             f"{math.degrees(lo + margin + shift):.6g}..{math.degrees(hi - margin + shift):.6g} deg")
         return a, b
 
     # -- the position function -------------------------------------------------------------------------
@@ -268,6 +272,16 @@ class LinkageTransmission(Transmission):
         return f"LinkageTransmission(output={self.output!r}, ratio={self.ratio:g}, harmonics={self.fit.y.harmonics})"
 
 
+def _blamed(fields, exc):
+    """``exc`` naming what the user set with --set where that, not the field it names, is the cause: a joint's
+    coordinate or the reference angle (linkage/files.py's rule for `strokeopt linkage`)."""
+    from .files import blame_the_set
+
+    if any(f.startswith("timing.") for f in fields.overridden) and "timing." in exc.field:
+        return exc   # the --set of [timing] is named already (check_reach)
+    return blame_the_set(exc, {"transmission": fields.data}, fields.overridden)
+
+
 def read_linkage_transmission(cls, fields, timing) -> LinkageTransmission:
     """``[transmission] type = "linkage"`` of a problem: the linkage (joints, links, crank, outputs, loads as a
     linkage file states them), ``output`` (the load: default the first), ``ratio`` and ``gear_inertia_kg_cm2``
@@ -289,7 +303,10 @@ def read_linkage_transmission(cls, fields, timing) -> LinkageTransmission:
                                         all(isinstance(c, (int, float)) and math.isfinite(c) for c in crank_range)
                                         and 0 < abs(crank_range[1] - crank_range[0]) < 360):
         raise fields.error("crank_range_deg", "must be [from, to] in deg of crank angle, less than a turn apart")
-    linkage, (index_min, _, angles) = read_linkage(fields, fields.file, "linkage", gravity, analysis=False)
+    try:
+        linkage, (index_min, _, angles) = read_linkage(fields, fields.file, "linkage", gravity, analysis=False)
+    except ProblemError as exc:
+        raise _blamed(fields, exc) from None
     names = [o.name for o in linkage.outputs]
     if not names:
         raise fields.error("outputs", "a linkage that drives a load names it: add [[transmission.outputs]]")
@@ -305,15 +322,23 @@ def read_linkage_transmission(cls, fields, timing) -> LinkageTransmission:
     try:
         tr = cls(linkage, output, ratio, gear, angles,
                  None if crank_range is None else tuple(math.radians(c) for c in crank_range), coordinates)
+    except ProblemError as exc:   # the closure refused (a dead centre, no closure): blame a --set geometry
+        raise _blamed(fields, exc) from None
     except ValueError as exc:
-        raise fields.error("crank_range_deg" if crank_range is not None and "branch" in str(exc) else "angles",
-                           str(exc)) from None
-    check_reach(tr, fields, "crank_range_deg" if crank_range is not None else "output", timing,
-                "positions within the branch, or another crank_range_deg")
-    smallest = tr.smallest_index()
-    if smallest < index_min:
-        raise fields.error("min_transmission_index", f"the linkage's transmission index falls to {smallest:.3g} over "
-                                                     f"the crank range, below {index_min:g}")
+        if crank_range is not None and "branch" in str(exc):
+            raise _blamed(fields, fields.error("crank_range_deg", str(exc))) from None
+        raise _blamed(fields, fields.error("angles", f"{exc}: the linkage's output or dynamics change too sharply for "
+                                                     f"{angles} samples a turn (a link near a dead centre); more "
+                                                     "samples a turn (angles) resolve it")) from None
+    try:
+        check_reach(tr, fields, "crank_range_deg" if crank_range is not None else "output", timing,
+                    "positions within the branch, or another crank_range_deg")
+        smallest = tr.smallest_index()
+        if smallest < index_min:
+            raise fields.error("min_transmission_index", f"the linkage's transmission index falls to {smallest:.3g} "
+                                                         f"over the crank range, below {index_min:g}")
+    except ProblemError as exc:
+        raise _blamed(fields, exc) from None
     fields.finish()
     return tr
 

@@ -61,6 +61,10 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
                            f"beyond {f['contact_position_deg']:g} deg, pushing "
                            f"towards {direction_word(f['direction'], True)} angles)" for f in inp["load_forces"]) or "none"
         load = f"load: moving inertia {inp['moving_inertia_kg_m2']:g} kg m^2 (rotary, gravity off), load torques: {forces}"
+        if "transmission_inertia_kg_m2" in inp:   # a linkage's links carry the load
+            lo, hi = inp["transmission_inertia_kg_m2"]
+            load += (f"; the transmission's own bodies: {lo:.4g} to {hi:.4g} kg m^2 on the motor shaft over the "
+                     "stroke, with their gravity and loads")
     else:
         forces = "; ".join(f"{f['name']} ({f['kind']}, {f['force_N']:g} N + {f['stiffness_N_m']:g} N/m "
                            f"beyond {f['contact_position_mm']:g} mm, pushing {f['direction']})"
@@ -86,7 +90,8 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
         what = (f"pulleys {names(d['pulley_teeth'])}" if d.get("transmission") is None
                 else f"the problem's {d['transmission']}")
         lines.insert(3, f"drive: motors {names(d['motors'])}; {what} (from {d['from']})")
-    cols = [("motor", "motor"), ("pulley_teeth", "z"), ("pulley_pitch_diameter_mm", "PD mm"),
+    belt = any(c.pulley.teeth is not None for c in sizing.candidates)  # no z and PD columns without a pulley
+    cols = [("motor", "motor")] + ([("pulley_teeth", "z"), ("pulley_pitch_diameter_mm", "PD mm")] if belt else []) + [
             ("peak_torque_N_m", "peak N m"), ("torque_limit_N_m", "limit N m"), ("rms_torque_N_m", "RMS N m"),
             ("overload_pct", "overload %"),
             ("peak_speed_rpm", "speed rpm"), ("inertia_ratio", "J ratio"), ("feasible", "feasible"),
@@ -102,7 +107,7 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
                 for c in sizing.candidates]
         keys = [k for k in rows[0] if k not in ("motor", "z", "angle")]
         lines.append("\nmotor torque at the instant of the peak, by term [N m] (they add up to the total):")
-        lines.append(format_table(rows, [("motor", "motor"), ("z", "z"), ("angle", "cam deg")]
+        lines.append(format_table(rows, [("motor", "motor")] + ([("z", "z")] if belt else []) + [("angle", "cam deg")]
                                   + [(k, k) for k in keys]))
         best = sizing.candidates[0]
         lines.append(f"\nchecks of {best.motor.name} with "
@@ -203,8 +208,9 @@ def plot_sizing(sizing, candidate=None, path=None):
         draw_pull_out(ax1, m, terms.omega, terms.total, sizing.limits,
                       f"{m.name}, {c.pulley.name}, {sizing.spm:g} spm, {sizing.inputs['law']}")
     else:
+        on = f"pulley z{c.pulley.teeth}" if c.pulley.teeth is not None else transmission_label(c.pulley.name)
         draw_torque_speed(ax1, m, terms.omega, terms.total, sizing.kinematics.t, sizing.limits,
-                          f"{m.name}, pulley z{c.pulley.teeth}, {sizing.spm:g} spm, {sizing.inputs['law']}")
+                          f"{m.name}, {on}, {sizing.spm:g} spm, {sizing.inputs['law']}")
     draw_torque_terms(ax2, 360.0 * sizing.kinematics.t / sizing.period, terms,
                       f"torque over the cycle (binding: {c.binding})")
     if path is not None:

@@ -5,8 +5,8 @@ from __future__ import annotations
 from .format import format_table
 
 #: The result columns of the tables: (key, heading).
-COLUMNS = (("handover_error_mm", "handover mm"), ("max_lag_mm", "lag mm"), ("impact_velocity_m_s", "impact m/s"),
-           ("peak_torque_N_m", "peak N m"))
+COLUMNS = (("handover_error_mm", "handover mm"), ("handover_error_deg", "handover deg"), ("max_lag_mm", "lag mm"),
+           ("impact_velocity_m_s", "impact m/s"), ("peak_torque_N_m", "peak N m"))
 
 
 def robust_text(report: dict) -> str:
@@ -38,6 +38,11 @@ def robust_text(report: dict) -> str:
     return "\n".join(lines)
 
 
+#: The quantities a histogram may show, in order of preference: (row key, axis label, unit).
+HISTOGRAMS = (("handover_error_mm", "handover error [mm]", "mm"),
+              ("handover_error_deg", "handover error [deg]", "deg"), ("impact_velocity_m_s", "impact velocity [m/s]", "m/s"), ("peak_torque_N_m", "peak torque [N m]", "N m"))
+
+
 def plot_robust(report: dict, path, limits: dict | None = None):
     """Histograms of the handover error and the impact velocity (limits drawn where the problem sets them) and
     the rank correlations as bars."""
@@ -51,8 +56,12 @@ def plot_robust(report: dict, path, limits: dict | None = None):
     limits = limits or {}
     rows = report["rows"]
     fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), layout="constrained")
-    for ax, (key, label, unit) in zip(axes[:2], (("handover_error_mm", "handover error [mm]", "mm"),
-                                                 ("impact_velocity_m_s", "impact velocity [m/s]", "m/s"))):
+    # the two histograms of what the samples have: the handover error and impact velocity a problem judges, else
+    # its peak torque (a problem without a handover or a contact model: no empty panels)
+    shown = [q for q in HISTOGRAMS if any(isinstance(r.get(q[0]), (int, float)) for r in rows)][:2]
+    for ax in axes[len(shown):2]:
+        ax.set_axis_off()
+    for ax, (key, label, unit) in zip(axes[:2], shown):
         values = np.array([r[key] for r in rows if isinstance(r.get(key), (int, float))], float)
         if values.size:
             ax.hist(values, bins=min(40, max(8, values.size // 10)), color="#4c72b0")

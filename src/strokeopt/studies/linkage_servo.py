@@ -32,7 +32,8 @@ from ..design.solve import solve_design
 from ..design.torque import design_torque
 # the gearbox catalogue lives in drive/gearboxes.py; its names stay importable from here (notebook 07)
 from ..drive.gearboxes import (KG_CM2, GearboxEntry, choose_smallest, gearbox_catalogue_file,  # noqa: F401
-                               load_gearboxes, own_motors)
+                               load_gearboxes)
+from ..drive.catalogue import own_motors
 from ..errors import ProblemError, SolverError
 from ..linkage.dynamics import analyse_dynamics
 from ..linkage.kinematics import kinematics_of

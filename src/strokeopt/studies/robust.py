@@ -25,6 +25,7 @@ import numpy as np
 from ..contact.options import SimulationOptions
 from ..drive.selection import resolve_drive
 from ..errors import ProblemError
+from ..io.load_units import error_unit
 from .runner import run_study
 from .verified import verify_design
 
@@ -217,7 +218,8 @@ def judge_sample(design, overrides: list[str]) -> dict:
     verified = verify_design(sampled, options=SAMPLE_SCENE_OPTIONS)
     row, failed = {}, []
     if verified.accuracy is not None:
-        row["handover_error_mm"] = verified.accuracy.handover_error * 1e3
+        scale, unit = error_unit(problem.timing.rotary)   # mm on a linear load, deg on a rotary one
+        row[f"handover_error_{unit}"] = verified.accuracy.handover_error * scale
         # the verified design's own row: the one pass rule within the design's check tolerance (verified_handover)
         judged = next((c for c in verified.design.checks if c["name"].startswith("handover accuracy")), None)
         if judged is not None and not judged["ok"]:
@@ -261,7 +263,7 @@ def wilson_interval(successes: int, n: int, z: float = 1.959964) -> tuple[float,
 
 
 #: The results a sensitivity is given for (the ones the scatter moves and a limit may judge).
-RESPONSES = ("handover_error_mm", "max_lag_mm", "impact_velocity_m_s", "peak_torque_N_m")
+RESPONSES = ("handover_error_mm", "handover_error_deg", "max_lag_mm", "impact_velocity_m_s", "peak_torque_N_m")
 
 
 def summarise(rows: list[dict], tolerances: list[Tolerance], design, method: str, seed: int) -> dict:
@@ -289,7 +291,11 @@ def summarise(rows: list[dict], tolerances: list[Tolerance], design, method: str
             varies = np.ptp(y[ok]) > NOT_VARYING * np.max(np.abs(y[ok]))
             entry[key] = float(spearmanr(x[ok], y[ok]).statistic) if varies else None   # None: does not vary
         sens.append(entry)
-    worst = sorted(rows, key=lambda r: (len(r.get("failed", [])), r.get("handover_error_mm", 0.0)), reverse=True)[:5]
+    # the most limits failed, then the largest handover error, then the largest peak torque (where nothing fails
+    # and no handover is judged, the samples in index order were listed as the worst)
+    worst = sorted(rows, key=lambda r: (len(r.get("failed", [])),
+                                        r.get("handover_error_mm", r.get("handover_error_deg", 0.0)),
+                                        r.get("peak_torque_N_m", 0.0)), reverse=True)[:5]
     return {"status": "ok", "problem": design.problem.name, "spm": design.spm, "samples": n, "method": method,
             "seed": seed, "tolerances": [{"field": t.field, "nominal": t.nominal, "lower": t.bounds[0],
                                           "upper": t.bounds[1], "distribution": t.distribution} for t in tolerances],
