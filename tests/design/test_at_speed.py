@@ -30,6 +30,7 @@ def test_the_least_acceleration_squared_through_positions_is_the_periodic_cubic_
     t = np.linspace(0.0, T, 200_001)
     reference = np.trapezoid(periodic(t, 2) ** 2, t)
     assert design.status == "optimal" and design.objective_value == pytest.approx(reference, rel=1e-7)
+    assert design.objective_unit == "rad^2/s^3"   # a rotary load's (it said m^2/s^3)
     # the motion itself, and continuous speed and acceleration across the joint and the cycle's wrap
     k = design.stroke.evaluate(t[:-1])
     np.testing.assert_allclose(k.s, periodic(t[:-1]) + 2 * math.pi * t[:-1] / T, atol=1e-7)
@@ -69,3 +70,4 @@ def test_advance_on_a_linear_load_is_refused():
     with pytest.raises(ProblemError) as err:
         load_problem(reference, ["timing.advance_deg=360"])
     assert err.value.field == "timing.advance_deg"
+

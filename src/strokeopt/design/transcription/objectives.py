@@ -56,7 +56,12 @@ def min_peak_accel(g):
     for mv, x, T in zip(moves, g.vars, g.T):
         a = (abs(mv.stroke) / T**2 / a_ref) * x.hull("a")  # bounds the acceleration everywhere, not only at the nodes
         b.constrain(f"peak accel epigraph move {mv.index}", ca.vertcat(ca.vec(z - a), ca.vec(z + a)), 0.0, np.inf)
-    return Cost(z + _smoothing(g), "m/s^2", lambda f, r: f * a_ref, z)
+    return Cost(z + _smoothing(g), _load_unit(g, "m/s^2"), lambda f, r: f * a_ref, z)
+
+
+def _load_unit(g, unit: str) -> str:
+    """A kinematic objective's unit for the load: rad where a rotary load's positions are angles."""
+    return unit.replace("m", "rad", 1) if g.problem.timing.rotary else unit
 
 
 def _integral_objective(kind: str, power: int, unit: str):
@@ -67,7 +72,7 @@ def _integral_objective(kind: str, power: int, unit: str):
         # integral over the move of (stroke/T^p * y^(k))^2 dt = stroke^2 / T^(2p-1) * integral over unit time
         ref = max(mv.stroke**2 / mv.duration**power for mv in moves)
         total = sum((mv.stroke**2 / T**power / ref) * x.integral(kind) for mv, x, T in zip(moves, g.vars, g.T))
-        return Cost(total, unit, lambda f, r: f * ref)
+        return Cost(total, _load_unit(g, unit), lambda f, r: f * ref)
 
     return build
 
