@@ -171,7 +171,7 @@ def test_the_servo_on_the_crank_is_designed_through_the_one_pipeline(tmp_path, c
     assert main(["solve", str(SERVO), "--out", str(out), "--json", "--plot", "none"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["status"] == "optimal" and report["drive"]["transmission"] == "linkage"
-    assert (out / "design.json").exists() and (out / "cam_table.csv").exists()
+    assert (out / "design.json").exists() and "= 1 stitch of 120.0000 ms" in (out / "cam_table.csv").read_text()
 
 
 def test_in_crank_coordinates_the_load_is_the_crank_and_the_torque_the_linkage_s_own():

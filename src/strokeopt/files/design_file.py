@@ -149,7 +149,8 @@ def cam_table_header(design, spec: CamTableSpec) -> list[str]:
     master = ("cam angle [deg], 0-360 per cam cycle" if spec.master_unit == "deg"
               else f"master counts, {spec.master_counts} per cam cycle")
     return [f"strokeopt cam table: {design.problem.name}, {design.objective} design at {design.spm:g} spm",
-            f"cycle: one cam cycle = {cycle * 1e3:.4f} ms = {cycle / stitch:g} stitches of {stitch * 1e3:.4f} ms",
+            f"cycle: one cam cycle = {cycle * 1e3:.4f} ms = {design.problem.cycle.count(f'{cycle / stitch:g}')} of "
+            f"{stitch * 1e3:.4f} ms",
             f"master: {master}; {spec.points} points, one every {spec.resolution_deg:g} deg",
             f"motor: {design.motor or '(none)'}; pulley: {pulley}"]
 
