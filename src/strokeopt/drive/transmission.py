@@ -174,6 +174,15 @@ class Transmission:
         """What a report states of the transmission: ``(label with its unit, value)`` rows."""
         return []
 
+    def load_switches(self) -> tuple[float, ...]:
+        """The load positions where a torque of :meth:`own_terms` jumps (a linkage's process load switched on or
+        off): the design holds the torque on both sides of each (pins inside a move, rows at a move's ends)."""
+        return ()
+
+    def same_position(self, x: float, switch: float) -> bool:
+        """Whether the load position ``x`` is the switch position ``switch`` (a turning crank: modulo a turn)."""
+        return abs(x - switch) <= 1e-12 * max(1.0, abs(x))
+
     def inertia_at(self, phi):
         """The transmission's own inertia on the motor shaft [kg m^2] at motor angles ``phi``: ``inertia`` for a
         transmission of constant inertia; a linkage's varies with the crank's pose."""

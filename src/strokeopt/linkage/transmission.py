@@ -235,6 +235,24 @@ class LinkageTransmission(Transmission):
                 ("series of the closure [harmonics; largest relative error]",
                  f"{self.fit.y.harmonics}; {self.fit.error:.1e}")]
 
+    def load_switches(self) -> tuple[float, ...]:
+        """Where a process load jumps: the start of its window where it starts above zero, its end where it
+        ends above zero (the beat-up: 1961 N at 360 deg, none after); as crank angles in crank coordinates
+        (every turn the stroke may reach), as output positions on the branch in output coordinates."""
+        angles = [a for load in self.linkage.loads
+                  for a, f in ((load.start, load.force_start), (load.end, load.force_end)) if f != 0]
+        if self.coordinates == "crank":
+            return tuple(a + 2 * math.pi * k for a in angles for k in range(-2, 3))
+        a, b = self.crank_range
+        inside = [a + (t - a) % (2 * math.pi) for t in angles]
+        return tuple(float(self.fit.y(t)) for t in inside if t <= b)
+
+    def same_position(self, x: float, switch: float) -> bool:
+        if self.coordinates == "crank":  # modulo a turn
+            d = (x - switch) % (2 * math.pi)
+            return min(d, 2 * math.pi - d) <= 1e-9
+        return super().same_position(x, switch)
+
     # -- the links' dynamics on the motor shaft ----------------------------------------------------------
     def inertia_at(self, phi):
         theta = self.crank_angle(phi)

@@ -287,7 +287,7 @@ class HybridDesign:
 
 def hybrid_crank_speed(linkage_problem, *, dwell_time_min_s: float | None = None,
                        peak_torque_max_N_m: float | None = None, n: int = 360,
-                       speed_range: tuple[float, float] = (0.2, 5.0)) -> HybridDesign:
+                       speed_range: tuple[float, float] = (0.2, 5.0), rotor_inertia: float = 0.0) -> HybridDesign:
     """The hybrid: keep the linkage and drive its crank with a servo at non-uniform speed, one crank turn per
     machine cycle, the beat-up still at crank angle 0 at time 0. Designed in the input (crank) coordinate, as a
     crank-driven linkage has no unique inverse: the unknowns are w = omega^2 at ``n`` crank angles (periodic);
@@ -296,14 +296,15 @@ def hybrid_crank_speed(linkage_problem, *, dwell_time_min_s: float | None = None
     ``h w^(-1/2)`` (trapezoidal). With ``dwell_time_min_s``: the least peak crank torque with the output at
     least that long in its rear near-dwell (the file's criterion); with ``peak_torque_max_N_m``: the longest
     such dwell with the peak crank torque within it. The crank speed stays within ``speed_range`` times the
-    constant speed. The rotor's inertia is left out (a gearbox of ratio i adds i^2 J_rotor to J). IPOPT."""
+    constant speed. ``rotor_inertia`` [kg m^2]: a motor's rotor on the crank shaft, added to J (a gearbox of ratio
+    i would add i^2 J_rotor); 0 by default, the crank's own torque. IPOPT."""
     import casadi as ca
 
     kin = kinematics_of(linkage_problem.linkage)
     cycle = kin.solve(8 * n)  # the terms at eighth steps: the NLP holds them at every quarter of each step
     omega0 = linkage_problem.omega
     dyn = analyse_dynamics(kin, cycle, omega0)
-    J, dJ, ext = dyn.J, dyn.dJ, dyn.gravity_torque + dyn.load_torque
+    J, dJ, ext = dyn.J + rotor_inertia, dyn.dJ, dyn.gravity_torque + dyn.load_torque
     theta = cycle.theta[0::8]
     h = 2 * math.pi / n
     period = 2 * math.pi / omega0

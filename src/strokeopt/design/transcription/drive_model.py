@@ -192,15 +192,33 @@ class DriveModel:
         s_v = ca.vec(g.si(k, np.linspace(0.0, 1.0, degree + 2), "s")).T
         self.omega.append(self.trans.motor_kinematics(s_v, v, 0 * v)[1])
         self.forces.append(terms.load_force)
-        # where a load force switches on inside the move the torque jumps: the pinned points (pins.py)
+        # where a load force switches on inside the move the torque jumps: the pinned points (pins.py); where the
+        # transmission's own load jumps at the move's start or end (the beat-up at 360 = 0 deg), both sides there
         pin_t, pin_f = pin_rows(g, k, mv, self.rotor, self.trans)
-        tau = ca.horzcat(tau, pin_t / self.tau_ref)
+        tau = ca.horzcat(tau, pin_t / self.tau_ref, self._end_sides(g, k, mv) / self.tau_ref)
         self.forces.append(pin_f)
         self.pin_values.append(ca.vec(pin_t) / self.peak_lim)
         self.pin_torques.append(ca.vec(pin_t) / self.tau_ref)
         self.pin_forces.append(ca.vec(pin_f))
         self.torques.append(tau)
         self.v.append(v)
+
+    def _end_sides(self, g, k: int, mv) -> ca.MX:
+        """The torque just before and just after each end of move ``k`` that lies on a jump of the transmission's
+        own loads (:meth:`~strokeopt.drive.transmission.Transmission.load_switches`): the nodes hold one side only."""
+        from ...drive.load import load_torque
+
+        switches = self.trans.load_switches()
+        out = []
+        for tau, pos in ((0.0, mv.start), (1.0, mv.start + mv.stroke)):
+            if not any(self.trans.same_position(pos, sw) for sw in switches):
+                continue
+            v, a = g.si(k, [tau], "v")[0, 0] if tau == 0.0 else g.si(k, [tau], "v")[-1, 0], \
+                g.si(k, [tau], "a")[0, 0] if tau == 0.0 else g.si(k, [tau], "a")[-1, 0]
+            eps = 1e-9 * max(abs(mv.stroke), 1e-3)
+            for side in (-eps, eps):
+                out.append(load_torque(self.rotor, self.trans, g.load, ca.MX(pos + side), v, a).total)
+        return ca.horzcat(*out) if out else ca.MX(1, 0)
 
     def dwells(self, g) -> None:
         """The dwells: at rest, torque from gravity and load forces only."""

@@ -22,7 +22,9 @@ PIN_WINDOW = 3
 
 
 def switch_positions(drive) -> list[float]:
-    return [f.contact_position for f in drive.load.forces if f.kind == "spring"]
+    """Where a load force switches on (a spring met) or a torque of the transmission's own loads jumps."""
+    own = drive.own_transmission.load_switches() if drive.own_transmission is not None else ()
+    return [f.contact_position for f in drive.load.forces if f.kind == "spring"] + list(own)
 
 
 def pin_positions(req: SolveRequest) -> list[float]:

@@ -92,6 +92,12 @@ def initial_unit(mesh: Mesh, rest_order: int) -> tuple[np.ndarray, np.ndarray, n
     return y, y1, a
 
 
+def steady_unit(mesh: Mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The initial guess of a move at speed at both ends: constant speed (y = tau), a crank turning steadily."""
+    starts = np.arange(mesh.intervals + 1) * mesh.h
+    return starts.copy(), np.ones_like(starts), np.zeros((mesh.intervals, mesh.degree + 1))
+
+
 @dataclass(frozen=True)
 class DriveChoice:
     """The parts of one solve: a motor (or the candidates of a Bonmin choice) and a pulley.
@@ -306,6 +312,8 @@ class SolveRequest:
             warm = self.warm
             if warm is not None and k < len(warm) and warm[k].mesh == self.mesh:
                 out.append((warm[k].S, warm[k].V, warm[k].A))
+            elif self.moves[k].start_speed and self.moves[k].end_speed:  # at speed at both ends: a steady move
+                out.append(steady_unit(self.mesh))
             else:
                 out.append(initial_unit(self.mesh, self.settings.rest_order))
         return out
