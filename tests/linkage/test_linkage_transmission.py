@@ -172,6 +172,12 @@ def test_the_servo_on_the_crank_is_designed_through_the_one_pipeline(tmp_path, c
     report = json.loads(capsys.readouterr().out)
     assert report["status"] == "optimal" and report["drive"]["transmission"] == "linkage"
     assert (out / "design.json").exists() and "= 1 stitch of 120.0000 ms" in (out / "cam_table.csv").read_text()
+    # a design file with a pulley on a transmission without one is refused (compare showed "pulley teeth 14")
+    data = json.loads((out / "design.json").read_text())
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({**data, "pulley_teeth": 14}))
+    assert main(["compare", str(bad), str(out / "design.json"), "--out", str(tmp_path / "c.html")]) == 2
+    assert "pulley_teeth: 14 teeth, but" in capsys.readouterr().err
 
 
 def test_in_crank_coordinates_the_load_is_the_crank_and_the_torque_the_linkage_s_own():

@@ -405,6 +405,10 @@ def check_design_fits(data: dict, problem, file: str) -> None:
         raise ProblemError(file, "transmission", f"the design was solved for a {kind} transmission; "
                                                  f"{problem.file} has a {problem.transmission.name}: a design of "
                                                  "another problem")
+    if data.get("pulley_teeth") is not None and problem.transmission.name != "belt_pulley":
+        raise ProblemError(file, "pulley_teeth", f"{data['pulley_teeth']} teeth, but {problem.file} has a "
+                                                 f"{problem.transmission.label}, no pulley: the design file is damaged or "
+                                                 "of another problem")
     rows = data.get("intervals", [])
     sch = problem.timing.schedule(float(data["spm"]))
     if len(rows) != len(problem.timing.intervals):
