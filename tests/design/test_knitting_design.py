@@ -173,3 +173,13 @@ def test_size_with_a_servo_motor_on_the_screw_lever(capsys):
     code = main(["size", str(KNITTING), "--motor", "055U2B30", "--plot", "none"])
     out, err = capsys.readouterr()
     assert code == 0 and "Traceback" not in err and "055U2B30 with the screw_lever ranks first" in out
+
+
+def test_the_report_of_a_design_that_exceeds_a_limit_is_written_and_exits_1(capsys, tmp_path):
+    # it wrote the page and exited 0 ("limits exceeded" only inside): every command exits 1 when the design fails
+    page = tmp_path / "r.html"
+    assert main(["report", str(KNITTING), "--set", "design.enforce_pull_out=false", "--out", str(page), "--json"]) == 1
+    captured = capsys.readouterr()
+    info = __import__("json").loads(captured.out)
+    assert info["status"] == "limits exceeded" and "pull_out_torque" in info["message"] and page.stat().st_size > 1e5
+    assert "strokeopt: limits exceeded" in captured.err

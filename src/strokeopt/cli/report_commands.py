@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import sys
+
 import time
 from pathlib import Path
 
@@ -82,13 +84,20 @@ def cmd_report(args) -> int:
     data = gather(verified, summary, source)
     info = write_report(data, out)
     info["build_time_s"] = time.perf_counter() - t0
-    info.update(status="ok", scenes=list(data.scenes), design_status=summary["status"])
+    # the page of a failed design is written all the same (what a colleague needs to see); the exit code is the
+    # design's, as solve's: 1 where it exceeds a limit or fails its verification
+    failed = not verified.ok
+    info.update(status=verified.status if failed else "ok", scenes=list(data.scenes), design_status=summary["status"])
+    if failed:
+        info["message"] = verified.verdict
     if args.json:
         _emit(to_json(info))
     else:
         print(f"written {out} ({info['size_bytes'] / 1024:.0f} KB, built in {info['build_time_s']:.2f} s; design "
               f"{source}; scenes simulated: {', '.join(data.scenes) or 'none'})")
-    return 0
+    if failed:
+        print(f"strokeopt: {verified.status}: {verified.verdict}", file=sys.stderr)
+    return 1 if failed else 0
 
 
 def _design_file(path: str):
