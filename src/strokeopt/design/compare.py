@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from .transcription.limits import ENFORCED_CHECKS
+from .transcription.objectives import objective_of
 from .transcription.request import design_moves
 from .result import Design
 from .torque import design_drive as _design_drive
@@ -64,8 +65,6 @@ def _stroke_measures(design: Design, stroke: StrokeFunction, samples: int = 20_0
 _CHECK_MEASURES = (("rms_torque", "rms_torque_N_m"), ("peak_speed", "peak_speed_rpm"),
                    ("pull_out_torque", "pull_out_pct"), ("step_rate", "step_rate_Hz"))
 
-_MEASURE_OF = {"min_peak_torque": "peak_torque_N_m", "min_rms_torque": "rms_torque_N_m", "min_energy": "energy",
-               "min_peak_accel": "a_max_m_s2", "min_accel_squared": "accel_squared", "min_jerk": "jerk_squared"}
 
 
 def compare_with_laws(design: Design, laws=None) -> list[dict]:
@@ -85,7 +84,8 @@ def compare_with_laws(design: Design, laws=None) -> list[dict]:
     if laws is None:
         own = problem.default_law
         laws = [own if name == own.name else make_law(name) for name in LAW_NAMES]
-    measure = _MEASURE_OF.get(design.objective)
+    found = objective_of(design.objective)
+    measure = found.compare_measure if found is not None else None
     settings = design.settings or getattr(problem, "design", None) or DesignSettings()
     opt = {"law": "optimal", **_stroke_measures(design, design.stroke)}
     opt.pop("_failed", None)  # the design's own checks (fine grid) say whether it is feasible

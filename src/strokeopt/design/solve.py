@@ -41,7 +41,7 @@ from .transcription.free import free_overrides, free_report
 from .transcription.limits import DRIVE_LIMITS, ENFORCED_CHECKS, MOVE_LIMITS, enforced_checks
 from .transcription.nlp import prepare
 from .transcription.objectives import (OBJECTIVES, TORQUE_OBJECTIVES, free_time, needs_drive_error, needs_terms,
-                         unknown_objective_error)
+                                       objective_of, unknown_objective_error)
 from .search.parts import choose_parts
 from .search.refine import RATE_TOLERANCE, Outcome, solve_one
 from .transcription.request import DriveChoice, DriveSetup, SolveRequest
@@ -237,10 +237,9 @@ def _with_terms(req: SolveRequest, best: Outcome) -> Outcome:
 
 def _fine_objective(design: Design, best: Outcome) -> float:
     checks = {c["name"]: c for c in best.fine.get("drive_checks", [])}
-    if design.objective == "min_peak_torque" and "peak_torque" in checks:
-        return float(checks["peak_torque"]["value"])
-    if design.objective == "min_rms_torque" and "rms_torque" in checks:
-        return float(checks["rms_torque"]["value"])
+    found = objective_of(design.objective)
+    if found is not None and found.fine_check in checks:  # the objective's own check, read on the fine grid
+        return float(checks[found.fine_check]["value"])
     return best.value
 
 

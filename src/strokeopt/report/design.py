@@ -8,6 +8,7 @@ from ..io.cycle import STITCH, cycle_of
 from ..io.load_units import load_key
 from .format import format_table, format_value, period_text
 from ..design.result import Design, design_summary, move_direction  # noqa: F401 (design_summary: read from here too)
+from ..design.transcription.objectives import objective_of
 from ..design.transcription.settings import DesignSettings
 
 
@@ -234,9 +235,6 @@ def impact_study_text(report: dict) -> str:
     return format_table(table, cols, title=title, text=("why",))
 
 
-#: What an objective's value is, for an axis label.
-OBJECTIVE_QUANTITY = {"min_peak_torque": "peak motor torque", "min_rms_torque": "RMS motor torque",
-                      "min_time": "stitch period", "min_stiffness": "spring stiffness"}
 
 
 def plot_impact_study(rows: list[dict], path=None, objective: str | None = None, title: str = ""):
@@ -257,7 +255,8 @@ def plot_impact_study(rows: list[dict], path=None, objective: str | None = None,
         if not r["feasible"]:
             axes[0].axvline(r["impact_velocity_max_m_s"], color="0.7", ls=":")
     unit = ok[0].get("objective_unit", "") if ok else ""
-    quantity = OBJECTIVE_QUANTITY.get(objective or "", "objective value")
+    found = objective_of(objective)
+    quantity = found.quantity if found is not None else "objective value"
     axes[0].set_ylabel(f"{quantity} [{unit}]" + (f" ({objective})" if objective else ""))
     if title:
         fig.suptitle(title)

@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from ..transcription.drive_model import peak_limit
-from ..transcription.objectives import free_time
+from ..transcription.objectives import free_time, is_peak_torque
 from ...drive.checks import is_stepper
 from ...errors import LimitError
 
@@ -76,7 +76,7 @@ def best_bound_first(req, motors: list) -> list[tuple[object, float | None]]:
     design at least as good as a motor's bound need not solve that motor (:func:`cannot_win`). For any other
     objective the bound says nothing of the objective: the smallest motor (least rated torque) first, bounds None,
     so where designs tie the smallest motor is the one the search keeps (parts.py)."""
-    if req.objective != "min_peak_torque":
+    if not is_peak_torque(req.objective):
         return [(m, None) for m in sorted(motors, key=lambda m: getattr(m, "rated_torque", None) or 0.0)]
     bounds = [(m, (torque_lower_bound(req, m) or (None,))[0]) for m in motors]
     return sorted(bounds, key=lambda mb: -math.inf if mb[1] is None else mb[1])

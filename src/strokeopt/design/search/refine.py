@@ -26,7 +26,7 @@ from .fine_grid import drive_checks_fine, fine_grid_report
 from ..transcription.free import free_values
 from ..transcription.limits import enforced_checks
 from ..transcription.nlp import Nlp, prepare
-from ..transcription.objectives import TIME_SCALE, free_time, needs_terms
+from ..transcription.objectives import TIME_SCALE, free_time, is_peak_torque, needs_terms
 from ..transcription.pins import pin_intervals, pin_times, pins_fit
 from ..transcription.request import SolveRequest
 from ..transcription.solver import STATUS_OK, solve_nlp
@@ -105,7 +105,7 @@ def pins_in_place(nlp: Nlp, x: np.ndarray, new: dict) -> bool:
     if not pins_fit(nlp.graph.pins, pin_intervals(moved), req.mesh) or terms.pin_values is None:
         return False
     expr = terms.pin_values
-    peak_held = req.objective == "min_peak_torque" and terms.pin_share is not None
+    peak_held = is_peak_torque(req.objective) and terms.pin_share is not None
     share = terms.pin_share if peak_held else ca.MX(0.0)  # only min_peak_torque holds a peak at a pin
     at = ca.Function("pins", [ca.vertcat(*nlp.built.w), ca.vertcat(*nlp.built.p)], [expr, share])
     before, share_before = (np.asarray(v).ravel() for v in at(x, nlp.numbers.p))
@@ -323,7 +323,7 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
                 motor = choice.candidates[int(np.argmax(pick))]
             checks = drive_checks_fine(drive, motor, choice, radius, rated, sols, settings.check_points)
             over = [max(0.0, -c.margin) for c in checks if c.name in enforced_checks(settings, drive.stepper) and math.isfinite(c.margin)]
-            if req.objective == "min_peak_torque":  # the epigraph held at the nodes; the fine grid reads the peak
+            if is_peak_torque(req.objective):  # the epigraph held at the nodes; the fine grid reads the peak
                 nlp_peak = nlp.graph.cost.transform(objective_value(nlp, sol, x), nlp.request)
                 fine_peak = next(c.value for c in checks if c.name == "peak_torque")
                 fine["peak_torque_nodes_N_m"] = nlp_peak

@@ -225,7 +225,7 @@ class RmsTorque(Limit):
         from ...drive.load import load_torque
 
         dm, b, mesh, mv = g.drive_model, g.built, g.request.mesh, g.request.moves[k]
-        if dm.rated is None and g.request.objective not in RMS_OBJECTIVES:  # a stepper: not a limit, not asked for
+        if dm.rated is None and not _reads_torque_squared(g.request.objective):  # a stepper: not a limit, not asked for
             return
         x_q, w_q = mesh.quadrature
         sq, vq, aq = (g.si(k, x_q, kind) for kind in ("s", "v", "a"))  # N x len(x_q)
@@ -248,8 +248,12 @@ class RmsTorque(Limit):
         return {"mean_sq": mean_sq}
 
 
-#: the objectives that read the integral of torque squared (:class:`RmsTorque`)
-RMS_OBJECTIVES = ("min_rms_torque", "min_energy")
+def _reads_torque_squared(objective: str) -> bool:
+    """Whether ``objective`` reads the integral of torque squared (:class:`RmsTorque`): the registry says."""
+    from .objectives import objective_of
+
+    found = objective_of(objective)
+    return found is not None and found.torque_squared
 
 
 class BeltTension(Limit):

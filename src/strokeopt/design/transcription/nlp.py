@@ -22,7 +22,7 @@ from .collocation import MoveSolution, MoveVariables
 from .contact_limits import CONTACT_LIMITS
 from .free import build_free
 from .limits import MOVE_LIMITS, LimitGroup, Terms, build_drive, collect, gathered
-from .objectives import TIME_SCALE, TIME_SCALE_BOUNDS, build_objective, free_time
+from .objectives import TIME_SCALE, TIME_SCALE_BOUNDS, build_objective, free_time, objective_of
 from .pins import initial_pin_times, pin_intervals, pin_windows, pins_fit
 from .request import SolveRequest, initial_unit
 
@@ -220,11 +220,16 @@ def add_moves(g: Graph) -> None:
                 if not speed]
         if settings.rest_order >= 3 and ends:
             b.constrain(f"move {mv.index} rest (jerk)", ca.vertcat(*ends), 0.0, 0.0)
-        if settings.rest_order >= 3 or req.objective == "min_snap":
+        if settings.rest_order >= 3 or _jerk_continuous(req.objective):
             b.constrain(f"move {mv.index} jerk continuity", x.jerk_joints(), 0.0, 0.0)
         for lim in MOVE_LIMITS:
             lim.on_move(g, k)
     add_speed_joints(g)
+
+
+def _jerk_continuous(objective: str) -> bool:
+    found = objective_of(objective)
+    return found is not None and found.jerk_continuous
 
 
 def add_speed_joints(g: Graph) -> None:

@@ -162,27 +162,40 @@ class Objective:
     build: Callable
     free_time: bool = False
     needs_terms: bool = False  # the handover error terms are part of every solve (not checked afterwards)
+    #: the drive check whose fine-grid value is the objective's own (the epigraph holds it at the nodes only)
+    fine_check: str | None = None
+    #: the key of the same measure in the comparison with the classic laws (design/compare.py)
+    compare_measure: str | None = None
+    #: what its value is, for an axis label
+    quantity: str = "objective value"
+    #: it reads the integral of torque squared (limits.RmsTorque builds it even where no rated torque is held)
+    torque_squared: bool = False
+    #: it holds the jerk continuous between mesh intervals (its integrand is the jerk's derivative)
+    jerk_continuous: bool = False
 
 
 REGISTRY = {o.name: o for o in (
-    Objective("min_peak_torque", "peak |motor torque| over the cycle (epigraph form)", True, min_peak_torque),
-    Objective("min_rms_torque", "RMS motor torque over the cycle", True, min_rms_torque),
+    Objective("min_peak_torque", "peak |motor torque| over the cycle (epigraph form)", True, min_peak_torque,
+              fine_check="peak_torque", compare_measure="peak_torque_N_m", quantity="peak motor torque"),
+    Objective("min_rms_torque", "RMS motor torque over the cycle", True, min_rms_torque, fine_check="rms_torque",
+              compare_measure="rms_torque_N_m", quantity="RMS motor torque", torque_squared=True),
     Objective("min_energy", "copper losses over one cycle (integral of torque squared over the moves)", True,
-              min_energy),
+              min_energy, compare_measure="energy", torque_squared=True),
     Objective("min_peak_accel", "peak |acceleration| of the driven member over all moves (epigraph form)", False,
-              min_peak_accel),
+              min_peak_accel, compare_measure="a_max_m_s2"),
     Objective("min_accel_squared", "integral of acceleration squared over the moves", False,
-              _integral_objective("a", 3, "m^2/s^3")),
-    Objective("min_jerk", "integral of jerk squared over the moves", False, _integral_objective("j", 5, "m^2/s^5")),
+              _integral_objective("a", 3, "m^2/s^3"), compare_measure="accel_squared"),
+    Objective("min_jerk", "integral of jerk squared over the moves", False, _integral_objective("j", 5, "m^2/s^5"),
+              compare_measure="jerk_squared"),
     Objective("min_snap", "integral of snap (4th derivative) squared over the moves", False,
-              _integral_objective("snap", 7, "m^2/s^7")),
+              _integral_objective("snap", 7, "m^2/s^7"), jerk_continuous=True),
     Objective("min_stiffness", "the free model stiffnesses of [design.free] (the softest springs the limits allow), "
-              "each relative to its upper bound", False, min_stiffness),
+              "each relative to its upper bound", False, min_stiffness, quantity="spring stiffness"),
     Objective("min_handover_error", "largest handover error of the design's terms (the servo loop and belt) over "
               "the handover window: the most accurate stroke at this rate", True, min_handover_error,
               needs_terms=True),
     Objective("min_time", "shortest stitch period (highest stitch rate) within every limit of the design, the "
-              "interval times fixed fractions of the cycle", True, min_time, free_time=True),
+              "interval times fixed fractions of the cycle", True, min_time, free_time=True, quantity="stitch period"),
 )}
 #: Every objective, with what it minimises.
 OBJECTIVES = {name: o.description for name, o in REGISTRY.items()}
@@ -190,6 +203,17 @@ OBJECTIVES = {name: o.description for name, o in REGISTRY.items()}
 KINEMATIC_OBJECTIVES = tuple(name for name, o in REGISTRY.items() if not o.needs_drive)
 #: Objectives that need the drive's load torque.
 TORQUE_OBJECTIVES = tuple(name for name, o in REGISTRY.items() if o.needs_drive)
+
+
+def objective_of(name: str | None) -> Objective | None:
+    """The registry's entry of ``name`` (None for no objective or a name it does not hold)."""
+    return REGISTRY.get(name or "")
+
+
+def is_peak_torque(objective: str | None) -> bool:
+    """Whether ``objective``'s value is the peak motor torque (a bound of the peak bounds it; a pin may hold it)."""
+    found = objective_of(objective)
+    return found is not None and found.fine_check == "peak_torque"
 
 
 def free_time(objective: str) -> bool:

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from ...drive.transmission import TEETH_RANGE
 from ...motion.timing import SPM_RANGE
 from .collocation import Mesh
-from .objectives import OBJECTIVES
+from .objectives import OBJECTIVES, REGISTRY
 from .solver import check_solver_options
 
 MOTOR_CHOICES = ("fixed", "enumerate", "bonmin")
@@ -145,8 +145,9 @@ def parse_design(f, *, file: str = "", rotary: bool = False) -> DesignSettings:
         raise f.error("jerk_max_from_law", "give either jerk_max_m_s3 or jerk_max_from_law = true, not both")
     if rest == 3 and d < 2:
         raise f.error("collocation_degree", "rest_order = 3 (jerk continuous) needs collocation_degree >= 2")
-    if objective == "min_snap" and d < 2:
-        raise f.error("collocation_degree", "min_snap needs collocation_degree >= 2 (snap of the acceleration polynomial)")
+    if REGISTRY[objective].jerk_continuous and d < 2:
+        raise f.error("collocation_degree", f"{objective} needs collocation_degree >= 2 (snap of the acceleration "
+                                            "polynomial)")
     accuracy = _read_accuracy(f, rotary)
     motor_choice = f.string("motor_choice", "fixed", choices=MOTOR_CHOICES)
     pulley = f.string("pulley", "fixed", choices=PULLEY_CHOICES)
