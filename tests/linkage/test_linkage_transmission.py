@@ -171,6 +171,9 @@ def test_the_servo_on_the_crank_is_designed_through_the_one_pipeline(tmp_path, c
     assert main(["solve", str(SERVO), "--out", str(out), "--json", "--plot", "none"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["status"] == "optimal" and report["drive"]["transmission"] == "linkage"
+    from strokeopt.report.design import design_text
+
+    assert f"mesh {d.mesh.intervals} x degree 3, refined from 40 intervals" in design_text(d)   # it was silent
     assert (out / "design.json").exists() and "= 1 stitch of 120.0000 ms" in (out / "cam_table.csv").read_text()
     # a design file with a pulley on a transmission without one is refused (compare showed "pulley teeth 14")
     data = json.loads((out / "design.json").read_text())

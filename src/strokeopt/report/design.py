@@ -136,11 +136,18 @@ def _machine_words(design: Design) -> str:
     return machine_of(design.problem).transmission
 
 
+def _refined(design: Design) -> str:
+    """How the mesh grew from the problem's (a limit exceeded between nodes doubles it), or nothing."""
+    start = getattr(design.settings, "mesh_intervals", None)
+    return f", refined from {start} intervals" if start and design.mesh.intervals != start else ""
+
+
 def design_text(design: Design, comparison: list[dict] | None = None) -> str:
     """A readable account of a design: choices, objective, moves, checks with margins, active constraints."""
     lines = [f"{design.problem.name}: optimal stroke at {cycle_of(design).rate(design.spm)} "
              f"({period_text(design.stroke.period, design.spm, design)}; {design.status}, "
-             f"solved in {design.solve_time_s:.2f} s, mesh {design.mesh.intervals} x degree {design.mesh.degree})",
+             f"solved in {design.solve_time_s:.2f} s, mesh {design.mesh.intervals} x degree {design.mesh.degree}"
+             f"{_refined(design)})",
              f"objective {design.objective}: {format_value(design.objective_value)} {design.objective_unit}"]
     if design.motor is not None:
         kind = " (stepper)" if getattr(design.motor_spec, "kind", "servo") == "stepper" else ""
