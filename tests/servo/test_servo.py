@@ -187,8 +187,10 @@ def test_tuned_gains_are_the_rule_in_a_bounded_cache(setup):
     from strokeopt.servo.loop import tuned_gains
 
     _, settings, axis, gains = setup
-    assert tuned_gains(axis, settings) == gains
-    assert tuned_gains(axis, settings) is tuned_gains(axis, settings)
+    first = tuned_gains(axis, settings)
+    assert first == gains
+    hits = tuned_gains.cache_info().hits
+    assert tuned_gains(axis, settings) is first and tuned_gains.cache_info().hits == hits + 1  # the cache answered
     assert tuned_gains.cache_info().maxsize is not None  # bounded
 
 

@@ -84,8 +84,7 @@ def compare_with_laws(design: Design, laws=None) -> list[dict]:
     if laws is None:
         own = problem.default_law
         laws = [own if name == own.name else make_law(name) for name in LAW_NAMES]
-    found = objective_of(design.objective)
-    measure = found.compare_measure if found is not None else None
+    measure = objective_of(design.objective).compare_measure
     settings = design.settings or getattr(problem, "design", None) or DesignSettings()
     opt = {"law": "optimal", **_stroke_measures(design, design.stroke)}
     opt.pop("_failed", None)  # the design's own checks (fine grid) say whether it is feasible

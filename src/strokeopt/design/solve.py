@@ -237,9 +237,9 @@ def _with_terms(req: SolveRequest, best: Outcome) -> Outcome:
 
 def _fine_objective(design: Design, best: Outcome) -> float:
     checks = {c["name"]: c for c in best.fine.get("drive_checks", [])}
-    found = objective_of(design.objective)
-    if found is not None and found.fine_check in checks:  # the objective's own check, read on the fine grid
-        return float(checks[found.fine_check]["value"])
+    check = objective_of(design.objective).fine_check
+    if check in checks:  # the objective's own check, read on the fine grid
+        return float(checks[check]["value"])
     return best.value
 
 

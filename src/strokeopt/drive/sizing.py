@@ -291,7 +291,7 @@ def size_drive(problem, spm: float | None = None, *, catalogue=None, motors=None
             c.max_spm, c.max_spm_binding = max_spm(kin, spm, c.motor, c.pulley, spec.load, spec.limits, belt, resolution)
     rotary = problem.timing.rotary  # a rotary load's keys say its units: kg m^2, N m, N m/rad, deg
     own = {}
-    if getattr(problem.transmission, "carries_load", False):  # a linkage's links: their inertia on the motor shaft
+    if problem.transmission.carries_load:  # a linkage's links: their inertia on the motor shaft
         j = np.ravel(problem.transmission.inertia_at(problem.transmission.motor_angle(kin.s)))
         own = {"transmission_inertia_kg_m2": [float(j.min()), float(j.max())]}
     inputs = {

@@ -22,7 +22,6 @@ import numpy as np
 
 from .._casadi import evaluate
 from ..errors import ProblemError
-from ..io.fields import _REQUIRED
 
 
 class Transmission:
@@ -428,7 +427,8 @@ class Gearbox(Transmission):
                                              f"{', '.join(known)}); for a gearbox of your own, state its ratio and "
                                              "inertia_kg_cm2 without a gearbox name")
             entry = known[name]
-        ratio = trans.number("ratio", entry.ratio if entry else _REQUIRED, min=1.0, max=1000.0)
+        ratio = trans.number("ratio", entry.ratio, min=1.0, max=1000.0) if entry else \
+            trans.number("ratio", min=1.0, max=1000.0)
         inertia = trans.number("inertia_kg_cm2", entry.inertia * 1e4 if entry else 0.0, min=0.0, max=1e6) * 1e-4
         if entry is not None:
             for key, value, own in (("ratio", ratio, entry.ratio), ("inertia_kg_cm2", inertia, entry.inertia)):

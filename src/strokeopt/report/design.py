@@ -262,8 +262,7 @@ def plot_impact_study(rows: list[dict], path=None, objective: str | None = None,
         if not r["feasible"]:
             axes[0].axvline(r["impact_velocity_max_m_s"], color="0.7", ls=":")
     unit = ok[0].get("objective_unit", "") if ok else ""
-    found = objective_of(objective)
-    quantity = found.quantity if found is not None else "objective value"
+    quantity = objective_of(objective).quantity
     axes[0].set_ylabel(f"{quantity} [{unit}]" + (f" ({objective})" if objective else ""))
     if title:
         fig.suptitle(title)

@@ -213,8 +213,8 @@ class DriveModel:
         for tau, pos in ((0.0, mv.start), (1.0, mv.start + mv.stroke)):
             if not any(self.trans.same_position(pos, sw) for sw in switches):
                 continue
-            v, a = g.si(k, [tau], "v")[0, 0] if tau == 0.0 else g.si(k, [tau], "v")[-1, 0], \
-                g.si(k, [tau], "a")[0, 0] if tau == 0.0 else g.si(k, [tau], "a")[-1, 0]
+            row = 0 if tau == 0.0 else -1   # the move's first or last mesh interval
+            v, a = g.si(k, [tau], "v")[row, 0], g.si(k, [tau], "a")[row, 0]
             eps = 1e-9 * max(abs(mv.stroke), 1e-3)
             for side in (-eps, eps):
                 out.append(load_torque(self.rotor, self.trans, g.load, ca.MX(pos + side), v, a).total)

@@ -21,6 +21,7 @@ import casadi as ca
 import numpy as np
 
 from .drive_model import DriveModel
+from .objectives import objective_of
 from ...io.load_units import error_unit
 
 
@@ -225,7 +226,7 @@ class RmsTorque(Limit):
         from ...drive.load import load_torque
 
         dm, b, mesh, mv = g.drive_model, g.built, g.request.mesh, g.request.moves[k]
-        if dm.rated is None and not _reads_torque_squared(g.request.objective):  # a stepper: not a limit, not asked for
+        if dm.rated is None and not objective_of(g.request.objective).torque_squared:  # a stepper: not asked for
             return
         x_q, w_q = mesh.quadrature
         sq, vq, aq = (g.si(k, x_q, kind) for kind in ("s", "v", "a"))  # N x len(x_q)
@@ -246,14 +247,6 @@ class RmsTorque(Limit):
                              "rms_torque")
             g.built.limit(lim, mean_sq - (dm.rated / dm.tau_ref) ** 2)
         return {"mean_sq": mean_sq}
-
-
-def _reads_torque_squared(objective: str) -> bool:
-    """Whether ``objective`` reads the integral of torque squared (:class:`RmsTorque`): the registry says."""
-    from .objectives import objective_of
-
-    found = objective_of(objective)
-    return found is not None and found.torque_squared
 
 
 class BeltTension(Limit):

@@ -220,16 +220,11 @@ def add_moves(g: Graph) -> None:
                 if not speed]
         if settings.rest_order >= 3 and ends:
             b.constrain(f"move {mv.index} rest (jerk)", ca.vertcat(*ends), 0.0, 0.0)
-        if settings.rest_order >= 3 or _jerk_continuous(req.objective):
+        if settings.rest_order >= 3 or objective_of(req.objective).jerk_continuous:
             b.constrain(f"move {mv.index} jerk continuity", x.jerk_joints(), 0.0, 0.0)
         for lim in MOVE_LIMITS:
             lim.on_move(g, k)
     add_speed_joints(g)
-
-
-def _jerk_continuous(objective: str) -> bool:
-    found = objective_of(objective)
-    return found is not None and found.jerk_continuous
 
 
 def add_speed_joints(g: Graph) -> None:

@@ -205,27 +205,28 @@ KINEMATIC_OBJECTIVES = tuple(name for name, o in REGISTRY.items() if not o.needs
 TORQUE_OBJECTIVES = tuple(name for name, o in REGISTRY.items() if o.needs_drive)
 
 
-def objective_of(name: str | None) -> Objective | None:
-    """The registry's entry of ``name`` (None for no objective or a name it does not hold)."""
-    return REGISTRY.get(name or "")
+#: What a name the registry does not hold asks for: nothing beyond the defaults (no measure, no flag).
+NO_OBJECTIVE = Objective("", "", False, None)
+
+
+def objective_of(name: str | None) -> Objective:
+    """The registry's entry of ``name``; :data:`NO_OBJECTIVE` for no objective or a name it does not hold."""
+    return REGISTRY.get(name or "", NO_OBJECTIVE)
 
 
 def is_peak_torque(objective: str | None) -> bool:
     """Whether ``objective``'s value is the peak motor torque (a bound of the peak bounds it; a pin may hold it)."""
-    found = objective_of(objective)
-    return found is not None and found.fine_check == "peak_torque"
+    return objective_of(objective).fine_check == "peak_torque"
 
 
 def free_time(objective: str) -> bool:
     """Whether ``objective`` makes the cycle time a decision variable."""
-    found = REGISTRY.get(objective)
-    return found is not None and found.free_time
+    return objective_of(objective).free_time
 
 
 def needs_terms(objective: str) -> bool:
     """Whether ``objective`` is built from the handover error terms (they are then in every solve)."""
-    found = REGISTRY.get(objective)
-    return found is not None and found.needs_terms
+    return objective_of(objective).needs_terms
 
 
 def needs_drive_error(problem, objective: str) -> ProblemError:

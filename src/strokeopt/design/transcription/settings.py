@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from ...drive.transmission import TEETH_RANGE
 from ...motion.timing import SPM_RANGE
 from .collocation import Mesh
-from .objectives import OBJECTIVES, REGISTRY
+from .objectives import OBJECTIVES, objective_of
 from .solver import check_solver_options
 
 MOTOR_CHOICES = ("fixed", "enumerate", "bonmin")
@@ -145,7 +145,7 @@ def parse_design(f, *, file: str = "", rotary: bool = False) -> DesignSettings:
         raise f.error("jerk_max_from_law", "give either jerk_max_m_s3 or jerk_max_from_law = true, not both")
     if rest == 3 and d < 2:
         raise f.error("collocation_degree", "rest_order = 3 (jerk continuous) needs collocation_degree >= 2")
-    if REGISTRY[objective].jerk_continuous and d < 2:
+    if objective_of(objective).jerk_continuous and d < 2:
         raise f.error("collocation_degree", f"{objective} needs collocation_degree >= 2 (snap of the acceleration "
                                             "polynomial)")
     accuracy = _read_accuracy(f, rotary)
