@@ -38,7 +38,33 @@ def test_unbounded_jerk_is_null_in_json(capsys, reference_path):
 def test_laws_json(capsys):
     assert main(["laws", "--json"]) == 0
     rows = json.loads(capsys.readouterr().out)["laws"]
-    assert [r["law"] for r in rows] == ["parabolic", "cubic", "cosine", "modified_sine", "sine", "poly5", "poly7"]
+    names = [r["law"] for r in rows]
+    # the thesis's seven first, in its order, then the cam handbooks' laws: at least 15 in all
+    assert names[:7] == ["parabolic", "cubic", "cosine", "modified_sine", "sine", "poly5", "poly7"]
+    assert len(names) >= 15 and len(set(names)) == len(names)
+    assert all(r["C_v"] > 1 and r["C_a"] > 3 and r["continuity"].startswith("C") for r in rows)
+
+
+def test_laws_plot_draws_every_law(tmp_path, capsys):
+    import matplotlib.image
+
+    path = tmp_path / "laws.png"
+    assert main(["laws", "--plot", str(path)]) == 0
+    assert "figure written to" in capsys.readouterr().out
+    assert matplotlib.image.imread(path).shape[0] > 1000  # four panels and a legend of 15 lines
+
+
+def test_law_option_takes_parameters(capsys, reference_path):
+    argv = ["kinematics", str(reference_path), "--json", "--plot", "none"]
+    assert main([*argv, "--law", "trapezoidal_velocity:constant_speed_share=0.5"]) == 0
+    half = json.loads(capsys.readouterr().out)
+    assert main([*argv, "--law", "trapezoidal_velocity"]) == 0
+    third = json.loads(capsys.readouterr().out)
+    # C_v = 2/(1 + c): 4/3 at c = 1/2 against 3/2 at c = 1/3, on the same move time
+    ratio = half["moves"][0]["v_max_m_s"] / third["moves"][0]["v_max_m_s"]
+    assert ratio == pytest.approx((4 / 3) / 1.5, rel=1e-6)
+    assert main([*argv, "--law", "trapezoidal_velocity:constant_speed_share"]) == 2
+    assert "PARAM=NUMBER" in capsys.readouterr().err
 
 
 def test_help_teaches(capsys):

@@ -166,7 +166,7 @@ def test_accuracy_with_an_optimal_design(capsys, reference, reference_path, tmp_
     path = tmp_path / "design.json"
     assert main(["accuracy", str(reference_path), "--design", str(path), "--json", "--plot", "none"]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert data["spm"] == 600 and len(data["laws"]) == 8
+    assert data["spm"] == 600 and len(data["laws"]) == 9  # the 8 compared laws and the optimum
     optimal = data["laws"][-1]
     assert optimal["law"].startswith("optimal") and 0 < optimal["handover_error_mm"] < 0.5
     assert optimal["residual_vibration_mm"] >= 0

@@ -66,8 +66,9 @@ def test_unit_rise_and_symmetry(name):
     assert law(0.0) == pytest.approx(0.0, abs=1e-14)
     assert law(1.0) == pytest.approx(1.0, abs=1e-14)
     assert np.all(np.diff(y) >= -1e-14)  # a rise never goes back
-    # all these laws are point-symmetric about the middle: y(x) + y(1-x) = 1
-    assert np.allclose(y + law(1 - x), 1.0, atol=1e-12)
+    # all but the double harmonic are point-symmetric about the middle: y(x) + y(1-x) = 1
+    symmetric = bool(np.allclose(y + law(1 - x), 1.0, atol=1e-12))
+    assert symmetric == (name != "double_harmonic")
     # velocity vanishes at both ends: the move joins its dwells smoothly in position and velocity
     _, y1 = law.derivatives([0.0, 1.0], order=1)
     assert np.allclose(y1, 0.0, atol=1e-12)
@@ -113,3 +114,122 @@ def test_unknown_law_and_parameter():
         make_law("trapezoid")
     with pytest.raises(ProblemError, match="takes no parameter chi"):
         make_law("poly5", chi=0.1)
+
+
+# --------------------------------------------------------------------------- the cam handbooks' laws
+
+def _peaks(name, **params):
+    c = make_law(name, **params).characteristics
+    return c.C_v, c.C_a, c.C_j
+
+
+def test_modified_trapezoid_published_values():
+    # Norton, Cam Design and Manufacturing Handbook (2nd ed., 2009), SCCA family: modified trapezoid
+    # C_v 2.0000, C_a 4.8881, C_j 61.426 (the issue's acceptance: C_a within 0.1 % of 4.888)
+    c_v, c_a, c_j = _peaks("modified_trapezoid")
+    assert c_v == pytest.approx(2.0, rel=1e-6)
+    assert c_a == pytest.approx(4.8881, rel=1e-4)
+    assert c_j == pytest.approx(61.426, rel=1e-4)
+    assert make_law("modified_trapezoid").characteristics.continuity == 2
+
+
+@pytest.mark.parametrize("shares, same_as", [
+    # Norton's SCCA table: (b, c) = (0.25, 0) modified sine, (0.5, 0) cycloidal, (0, 0) simple harmonic,
+    # (0, 1) constant acceleration -- the family written once reproduces the laws written on their own
+    ((0.25, 0.0), ("modified_sine", {"chi": 0.125})),
+    ((0.5, 0.0), ("sine", {})),
+    ((0.0, 0.0), ("cosine", {})),
+    ((0.0, 1.0), ("parabolic", {})),
+])
+def test_scca_family_members_are_the_classic_laws(shares, same_as):
+    family = make_law("scca", sine_share=shares[0], constant_accel_share=shares[1])
+    name, params = same_as
+    x = np.linspace(0, 1, 801)
+    assert np.allclose(family(x), make_law(name, **params)(x), atol=1e-12)
+
+
+def test_trapezoidal_velocity_with_a_third_at_constant_speed():
+    # the issue's acceptance (and the closed form: C_v = 1/(1 - t_a), C_a = C_v/t_a with t_a = 1/3)
+    c_v, c_a, _ = _peaks("trapezoidal_velocity", constant_speed_share=1 / 3)
+    assert c_v == pytest.approx(1.5, rel=1e-9)
+    assert c_a == pytest.approx(4.5, rel=1e-9)
+
+
+def test_modified_constant_velocity_mcv50_published_values():
+    # Makino's MCV50 (modified sine, half the move at constant velocity), as the Japanese cam-curve tables
+    # list it: V_m 1.28, A_m 8.01, J_m 201.4 (3-4 digits as printed)
+    c_v, c_a, c_j = _peaks("modified_sine_cv", chi=0.125, constant_speed_share=0.5)
+    assert c_v == pytest.approx(1.28, abs=5e-3)
+    assert c_a == pytest.approx(8.01, abs=5e-3)
+    assert c_j == pytest.approx(201.4, abs=5e-2)
+
+
+def test_trapezoidal_acceleration_closed_form():
+    # straight jerk ramps over 1/8 of the move, constant acceleration between (Norton's "trapezoidal
+    # acceleration"): the areas give C_v = 2, C_a = 16/3 and C_j = C_a/(1/8) = 128/3
+    c_v, c_a, c_j = _peaks("trapezoidal_acceleration")
+    assert (c_v, c_a, c_j) == pytest.approx((2.0, 16 / 3, 128 / 3), rel=1e-9)
+
+
+@pytest.mark.parametrize("name, params, base", [
+    ("trapezoidal_velocity", {}, ("parabolic", {})),
+    ("s_curve", {"ramp_share": 0.5}, ("trapezoidal_acceleration", {})),
+    ("s_curve", {"ramp_share": 1.0}, ("s_curve", {"ramp_share": 1.0, "constant_speed_share": 0.0})),
+    ("modified_sine_cv", {"chi": 0.095}, ("modified_sine", {"chi": 0.095})),
+])
+@pytest.mark.parametrize("share", [0.1, 1 / 3, 0.6])
+def test_constant_speed_share_scales_the_base_law(name, params, base, share):
+    # a cruise of share c inserted into a symmetric law of C_v, C_a, C_j: the accelerating part runs in
+    # (1 - c) of the time at a stroke share s = (1 - c)/((1 - c) + C_v c), so
+    # C_v' = C_v/((1 - c) + C_v c), C_a' = C_v'/(1 - c) * C_a/C_v, C_j' = C_a'/(1 - c) * C_j/C_a
+    b_v, b_a, b_j = _peaks(base[0], **base[1])
+    c_v, c_a, c_j = _peaks(name, **params, constant_speed_share=share)
+    k = 1 - share
+    assert c_v == pytest.approx(b_v / (k + b_v * share), rel=1e-8)
+    assert c_a == pytest.approx(b_a / (k * (k + b_v * share)), rel=1e-8)
+    assert c_j == pytest.approx(b_j / (k**2 * (k + b_v * share)), rel=1e-8)
+
+
+def test_poly9_against_its_polynomial():
+    # y = 126x^5 - 420x^6 + 540x^7 - 315x^8 + 70x^9: derivatives by numpy's polynomial class on a fine grid
+    p = np.polynomial.Polynomial([0, 0, 0, 0, 0, 126, -420, 540, -315, 70])
+    x = np.linspace(0, 1, 200001)
+    c_v, c_a, c_j = _peaks("poly9")
+    for order, value in ((1, c_v), (2, c_a), (3, c_j)):
+        assert value == pytest.approx(np.max(np.abs(p.deriv(order)(x))), rel=1e-8)
+    assert c_v == pytest.approx(315 / 128, rel=1e-12)
+    assert make_law("poly9").characteristics.continuity == 4  # velocity to snap vanish at both ends
+
+
+def test_double_harmonic_closed_form():
+    # Rothbart, Cam Design Handbook: y = (1 - cos pi x)/2 - (1 - cos 2 pi x)/8; y' peaks at x = 2/3,
+    # C_v = 3 sqrt(3) pi/8; the acceleration ends at -pi^2 against the dwell (a jump: C1)
+    c = make_law("double_harmonic").characteristics
+    assert c.C_v == pytest.approx(3 * math.sqrt(3) * math.pi / 8, rel=1e-9)
+    assert c.C_a == pytest.approx(math.pi**2, rel=1e-9)
+    assert c.continuity == 1 and math.isinf(c.C_j)
+
+
+@pytest.mark.parametrize("name, bad, field", [
+    ("scca", {"sine_share": 0.6, "constant_accel_share": 0.6}, "more than 1"),
+    ("scca", {"sine_share": -0.1}, "sine_share"),
+    ("s_curve", {"ramp_share": 0.0}, "ramp_share"),
+    ("s_curve", {"ramp_share": 1.5}, "ramp_share"),
+    ("trapezoidal_velocity", {"constant_speed_share": 1.0}, "constant_speed_share"),
+    ("modified_sine_cv", {"chi": 0.3}, "chi"),
+])
+def test_bad_family_parameters(name, bad, field):
+    with pytest.raises(ProblemError, match=field):
+        make_law(name, **bad)
+
+
+def test_laws_in_a_problem_file(tmp_path, reference_path):
+    from strokeopt import load_problem
+
+    text = reference_path.read_text()
+    text = text.replace('law = "modified_sine"', 'law = "s_curve"\nramp_share = 0.8', 1)
+    text = text.replace("chi = 0.095", "constant_speed_share = 0.25", 1)
+    path = tmp_path / "scurve.toml"
+    path.write_text(text)
+    law = load_problem(path).default_law
+    assert (law.name, law.params) == ("s_curve", {"constant_speed_share": 0.25, "ramp_share": 0.8})

@@ -168,8 +168,9 @@ def _load(args, fix_in_design: bool = False):
     law_name = getattr(args, "law", None)
     chi = getattr(args, "chi", None)
     if law_name is not None or chi is not None:
-        name = law_name or problem.default_law.name
-        params = {} if law_name and law_name != problem.default_law.name else dict(problem.default_law.params)
+        name, given = _law_option(law_name) if law_name else (problem.default_law.name, {})
+        params = {} if law_name and name != problem.default_law.name else dict(problem.default_law.params)
+        params.update(given)
         if chi is not None:
             params["chi"] = chi
         problem = problem.with_law(make_law(name, where=("command line", "--law/--chi"), **params))
@@ -178,6 +179,22 @@ def _load(args, fix_in_design: bool = False):
 
         check_design_fits(args.design_data, problem, str(args.design))
     return problem
+
+
+def _law_option(text: str) -> tuple[str, dict]:
+    """``--law NAME`` or ``--law NAME:PARAM=VALUE,...`` (``s_curve:ramp_share=0.6,constant_speed_share=0.2``)."""
+    name, _, rest = text.partition(":")
+    params = {}
+    for item in filter(None, (part.strip() for part in rest.split(","))):
+        key, eq, value = item.partition("=")
+        try:
+            params[key.strip()] = float(value)
+        except ValueError:
+            raise ProblemError("command line", "--law", f"{item!r} is not PARAM=NUMBER (as in "
+                                                        "--law s_curve:ramp_share=0.6)") from None
+        if not eq:
+            raise ProblemError("command line", "--law", f"{item!r} is not PARAM=NUMBER")
+    return name.strip(), params
 
 
 def _slug(text) -> str:

@@ -48,7 +48,9 @@ def _stroke_options(p: argparse.ArgumentParser, sweep: bool = False, law: bool =
                    + (", or a sweep START:STOP:STEP" if sweep else "")
                    + " (default: machine.spm of the file)")
     if law:
-        p.add_argument("--law", help="use this motion law for every move (see 'strokeopt laws')")
+        p.add_argument("--law", metavar="NAME[:PARAM=VALUE,...]",
+                       help="use this motion law for every move, with its parameters after a colon (see "
+                            "'strokeopt laws'; e.g. --law s_curve:ramp_share=0.6,constant_speed_share=0.2)")
         p.add_argument("--chi", type=float, help="shape parameter chi of the modified sine law (0.001 <= chi <= 0.25)")
 
 
@@ -128,11 +130,16 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     problem = _problem_parent()
 
-    p = sub.add_parser("laws", help="table of the classic motion laws and their characteristic values",
-                       description="The classic motion laws on a unit rise and their characteristic values "
-                                   "C_v, C_a, C_j (computed from the laws, not typed in).",
-                       epilog="Example: strokeopt laws --json")
+    p = sub.add_parser("laws", help="table of the motion laws and their characteristic values",
+                       description="The motion laws on a unit rise (the thesis's seven, the modified trapezoid, the "
+                                   "trapezoidal velocity and acceleration, the S-curve, the modified sine with "
+                                   "constant velocity, the SCCA family, polynomials and the double harmonic) and their "
+                                   "characteristic values C_v, C_a, C_j (computed from the laws, not typed in). A "
+                                   "problem file names a law with law = NAME and its parameters beside it; a "
+                                   "command takes --law NAME:PARAM=VALUE,...",
+                       epilog="Examples: strokeopt laws --json; strokeopt laws --plot laws.png")
     p.add_argument("--json", action="store_true", help="print only JSON on stdout")
+    p.add_argument("--plot", metavar="FILE", help="a figure of every law's position, velocity, acceleration and jerk")
     p.set_defaults(run=cmd_laws)
 
     p = sub.add_parser("kinematics", parents=[problem], help="peak speed, acceleration and jerk of each interval",

@@ -18,7 +18,6 @@ from .result import Design
 from .torque import design_drive as _design_drive
 from .transcription.settings import DesignSettings
 from ..io.load_units import to_load_units
-from ..motion.laws import make_law
 from ..motion.stroke import StrokeFunction
 
 
@@ -78,12 +77,11 @@ def compare_with_laws(design: Design, laws=None) -> list[dict]:
     handover accuracy is not checked) and which it breaks. The optimum comes first, then the
     feasible laws, then the infeasible ones: a law that breaks a constraint does not beat the optimum.
     """
-    from ..motion.laws import LAW_NAMES
+    from ..motion.laws import compared_laws
 
     problem = design.problem
     if laws is None:
-        own = problem.default_law
-        laws = [own if name == own.name else make_law(name) for name in LAW_NAMES]
+        laws = compared_laws(problem.default_law)
     measure = objective_of(design.objective).compare_measure
     settings = design.settings or getattr(problem, "design", None) or DesignSettings()
     opt = {"law": "optimal", **_stroke_measures(design, design.stroke)}

@@ -23,9 +23,10 @@ import numpy as np
 
 from .._casadi import evaluate
 from ..errors import ProblemError
+from .pieces import joints, mirrored_law, ramp_half, scca_half, with_constant_speed
 
 #: Derivative orders by name, as reported by :attr:`MotionLaw.continuity`.
-DERIVATIVE_NAMES = ("position", "velocity", "acceleration", "jerk", "snap")
+DERIVATIVE_NAMES = ("position", "velocity", "acceleration", "jerk", "snap", "crackle")
 
 
 def _parabolic(x):
@@ -82,13 +83,52 @@ def _modified_sine(x, chi):
     return ca.if_else(x < chi, rise(x), ca.if_else(x <= 1 - chi, middle, 1 - rise(1 - x)))
 
 
+def _poly9(x):
+    # 5-6-7-8-9 polynomial: v = a = jerk = snap = 0 at both ends
+    return 126 * x**5 - 420 * x**6 + 540 * x**7 - 315 * x**8 + 70 * x**9
+
+
+def _double_harmonic(x):
+    # Rothbart's double harmonic: a rise that starts gently and ends hard (for a quick return; not symmetric)
+    return (1 - ca.cos(math.pi * x)) / 2 - (1 - ca.cos(2 * math.pi * x)) / 8
+
+
+def _scca(x, sine_share, constant_accel_share):
+    return mirrored_law(x, scca_half(sine_share, constant_accel_share))
+
+
+def _trapezoidal_velocity(x, constant_speed_share):
+    return mirrored_law(x, with_constant_speed([("poly", 0.5, (1.0,))], constant_speed_share))
+
+
+def _s_curve(x, ramp_share, constant_speed_share):
+    return mirrored_law(x, with_constant_speed(ramp_half(ramp_share), constant_speed_share))
+
+
+def _modified_sine_cv(x, chi, constant_speed_share):
+    return mirrored_law(x, with_constant_speed(scca_half(2 * chi, 0.0), constant_speed_share))
+
+
 @dataclass(frozen=True)
 class _LawSpec:
     title: str
     shape: object
     params: dict = field(default_factory=dict)  # name -> (default, low, high, low_open)
     breaks: object = lambda **p: ()  # interior points where the pieces join
+    fixed: dict = field(default_factory=dict)  # a named member of a family: the family's parameters it fixes
+    check: object = lambda **p: None  # a message where the parameters together are not a law
+    symmetric: bool = True  # y(1 - x) = 1 - y(x)
 
+
+def _scca_check(sine_share, constant_accel_share):
+    if sine_share + constant_accel_share > 1 + 1e-12:
+        return (f"sine_share + constant_accel_share = {sine_share + constant_accel_share:g} is more than 1 "
+                "(the two shares and the middle cosine's make up the move)")
+    return None
+
+
+#: A share of constant speed below 1: at 1 the move would have no time left to accelerate.
+_CRUISE = (0.0, 0.0, 0.95, False)
 
 _LAWS: dict[str, _LawSpec] = {
     "parabolic": _LawSpec("parabolic (constant acceleration)", _parabolic, breaks=lambda: (0.5,)),
@@ -102,13 +142,50 @@ _LAWS: dict[str, _LawSpec] = {
         params={"chi": (0.125, 0.001, 0.25, False)},
         breaks=lambda chi: (chi, 1 - chi),
     ),
-    "sine": _LawSpec("sine (cycloidal)", _sine),
+    "sine": _LawSpec("sine (cycloidal; VDI 2143's inclined sine at rest-to-rest)", _sine),
     "poly5": _LawSpec("polynomial 3-4-5", _poly5),
     "poly7": _LawSpec("polynomial 4-5-6-7", _poly7),
+    "poly9": _LawSpec("polynomial 5-6-7-8-9", _poly9),
+    "modified_trapezoid": _LawSpec(
+        "modified trapezoid (cycloidal flanks, constant acceleration)", _scca,
+        fixed={"sine_share": 0.25, "constant_accel_share": 0.5},
+        breaks=lambda sine_share, constant_accel_share: joints(scca_half(sine_share, constant_accel_share))),
+    "scca": _LawSpec(
+        "sine-constant-cosine acceleration family", _scca,
+        params={"sine_share": (0.25, 0.0, 1.0, False), "constant_accel_share": (0.5, 0.0, 1.0, False)},
+        breaks=lambda sine_share, constant_accel_share: joints(scca_half(sine_share, constant_accel_share)),
+        check=_scca_check),
+    "trapezoidal_velocity": _LawSpec(
+        "trapezoidal velocity (constant acceleration, cruise, constant deceleration)", _trapezoidal_velocity,
+        params={"constant_speed_share": (1 / 3, *_CRUISE[1:])},
+        breaks=lambda constant_speed_share: joints(
+            with_constant_speed([("poly", 0.5, (1.0,))], constant_speed_share))),
+    "trapezoidal_acceleration": _LawSpec(
+        "trapezoidal acceleration (straight jerk ramps over 1/8 of the move)", _s_curve,
+        fixed={"ramp_share": 0.5, "constant_speed_share": 0.0},
+        breaks=lambda ramp_share, constant_speed_share: joints(
+            with_constant_speed(ramp_half(ramp_share), constant_speed_share))),
+    "s_curve": _LawSpec(
+        "jerk-limited S-curve (trapezoidal acceleration, cruise)", _s_curve,
+        # ramp_share: the share of each acceleration phase spent ramping it (1 = a triangle); a drive's
+        # limits A and J over an acceleration phase of time t_a give ramp_share = 2*A/(J*t_a)
+        params={"ramp_share": (0.5, 0.0, 1.0, True), "constant_speed_share": (1 / 3, *_CRUISE[1:])},
+        breaks=lambda ramp_share, constant_speed_share: joints(
+            with_constant_speed(ramp_half(ramp_share), constant_speed_share))),
+    "modified_sine_cv": _LawSpec(
+        "modified sine with constant velocity", _modified_sine_cv,
+        params={"chi": (0.125, 0.001, 0.25, False), "constant_speed_share": (0.5, *_CRUISE[1:])},
+        breaks=lambda chi, constant_speed_share: joints(
+            with_constant_speed(scca_half(2 * chi, 0.0), constant_speed_share))),
+    "double_harmonic": _LawSpec("double harmonic (gentle start, hard end)", _double_harmonic, symmetric=False),
 }
 
-#: Names of the classic laws, in the order the thesis compares them.
+#: Names of the laws: the thesis's seven in the order it compares them, then the cam handbooks' further ones.
 LAW_NAMES = tuple(_LAWS)
+#: The laws a design is compared with (solve's table, the report, ``accuracy``): the thesis's seven and the
+#: modified trapezoid, the cam law used most; every other law is one ``--law`` away.
+COMPARED_LAWS = (*LAW_NAMES[:7], "modified_trapezoid")
+
 #: Every parameter name any law takes (``chi``), for readers of problem files.
 LAW_PARAMETERS = tuple(sorted({p for spec in _LAWS.values() for p in spec.params}))
 
@@ -148,7 +225,7 @@ class MotionLaw:
         self.params = dict(params)
         self._spec = spec
         x = ca.SX.sym("x")
-        y = spec.shape(x, **params)
+        y = spec.shape(x, **spec.fixed, **params)
         ders = [y]
         for _ in range(4):
             ders.append(ca.jacobian(ders[-1], x))
@@ -173,7 +250,7 @@ class MotionLaw:
     @property
     def breaks(self) -> tuple[float, ...]:
         """Interior points where the law's pieces join (where a derivative may jump)."""
-        return tuple(self._spec.breaks(**self.params))
+        return tuple(self._spec.breaks(**self._spec.fixed, **self.params))
 
     def __call__(self, x):
         """y(x): numeric for numbers/arrays, symbolic for CasADi expressions."""
@@ -274,6 +351,9 @@ def make_law(name: str, *, where: tuple[str, str] = ("<law>", "law"), **params: 
         if (value <= lo if lo_open else value < lo) or value > hi:
             raise ProblemError(file, table + pname, f"{value!r} is out of range {'(' if lo_open else '['}{lo:g}, {hi:g}] for law {name!r}")
         full[pname] = float(value)
+    problem_with_them = spec.check(**full)
+    if problem_with_them:
+        raise ProblemError(file, table + sorted(full)[-1], problem_with_them)
     return _cached_law(name, tuple(sorted(full.items())))
 
 
@@ -301,3 +381,9 @@ def law_table() -> list[dict]:
             }
         )
     return rows
+
+
+def compared_laws(own: MotionLaw) -> list[MotionLaw]:
+    """The laws a design is compared with, the problem's own law with its parameters among them."""
+    laws = [own if name == own.name else make_law(name) for name in COMPARED_LAWS]
+    return laws if own.name in COMPARED_LAWS else [*laws, own]

@@ -224,3 +224,26 @@ def draw_kinematics(axes, problem, strokes, spm: float, n: int = 3601) -> None:
 
         # below the cam-angle axis, off the data (each axis carries the strokes' labels)
         legend_outside(axes[-1], where="below", ncol=min(len(strokes), 3))
+
+
+def plot_laws(laws, path: str | Path | None = None, n: int = 2001):
+    """The family of motion laws on a unit rise: position, velocity, acceleration and jerk over the
+    normalised time, one line per law (a jerk impulse at a jump is left out, not drawn as a spike)."""
+    x = np.linspace(0.0, 1.0, n)
+    fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 12), constrained_layout=True)
+    colours = plt.get_cmap("tab20").colors
+    for i, law in enumerate(laws):
+        ders = law.derivatives(x, 3)
+        style = {"color": colours[i % len(colours)], "ls": ("-", "--", ":")[i // len(colours) % 3], "lw": 1.1}
+        for k, ax in enumerate(axes):
+            ax.plot(x, ders[k], label=law.label if k == 0 else None, **style)
+    for ax, name in zip(axes, ("y", "y' = v T/h", "y'' = a T^2/h", "y''' = jerk T^3/h")):
+        ax.set_ylabel(name)
+        ax.grid(alpha=0.3)
+    axes[0].set_title("Motion laws, unit rise (strokeopt laws)")
+    axes[-1].set_xlabel("x = t/T")
+    fig.legend(loc="outside lower center", fontsize=7, ncol=2)
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig

@@ -263,7 +263,7 @@ def residual_vibration_table(problem, spm: float | None = None, strokes=(), *,
                              gains: Gains | None = None, progress=None) -> list[dict]:
     """Handover error and residual belt vibration of every classic law on the problem's drive
     (and of any extra ``strokes``: ``(label, StrokeFunction)`` pairs, e.g. an optimal design)."""
-    from ..motion.laws import LAW_NAMES, make_law
+    from ..motion.laws import compared_laws
 
     spm = problem.spm if spm is None else float(spm)
     settings = settings_of(problem, settings)
@@ -271,8 +271,7 @@ def residual_vibration_table(problem, spm: float | None = None, strokes=(), *,
     gains = gains or tuned_gains(axis, settings)
     scale, u = error_unit(axis.rotary)
     cases = []
-    for name in LAW_NAMES:
-        law = problem.default_law if name == problem.default_law.name else make_law(name)
+    for law in compared_laws(problem.default_law):
         cases.append((law.label, lambda law=law: problem.with_law(law).stroke(spm)))
     cases += [(label, lambda st=st: st) for label, st in strokes]
     rows = []
