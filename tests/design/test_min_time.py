@@ -209,3 +209,37 @@ def test_min_handover_error_is_the_most_accurate_stroke(reference):
     # an accuracy below the least error there is: refused at once, in the diagnosis's words
     with pytest.raises(SolverError, match=r"handover accuracy needs .* mm \(the most accurate stroke\), limit 0.02 mm"):
         solve_design(reference, objective="min_handover_error", spm=600, settings=replace(settings, accuracy=0.02e-3))
+
+
+def _a_max():
+    # min_time.toml: 200 % of the 055U2B30's rated 1.2 N m over J/r + m r (28 GT3 teeth, 0.2 kg)
+    r = 28 * 3e-3 / math.pi / 2
+    return 2.4 / (0.23e-4 / r + 0.2 * r)
+
+
+def test_min_time_under_a_jerk_bound_alone():
+    # closed form of the jerk-bounded rest-to-rest move (bang-bang jerk, T/4 each): T = (32 h/J)^(1/3);
+    # the issue's acceptance: within 0.1 %
+    design = solve_design(load_problem(KNOWN / "min_time_jerk.toml"))
+    t_move = (32 * 0.010 / 1e5) ** (1 / 3)
+    assert design.status == "optimal"
+    for move in design.moves:
+        assert move.duration == pytest.approx(t_move, rel=1e-3)
+    assert design.objective_value == pytest.approx(20 * t_move, rel=1e-3)
+    assert "jerk bound move 1" in design.notes[0] and "peak torque" not in design.notes[0]
+    assert design.check_value("peak_torque") < 0.7 * 2.4  # J T/4 = 67 % of a_max: the torque limit is slack
+
+
+def test_min_time_under_acceleration_and_jerk_bounds():
+    # closed form with t_j = A/J: T = A/J + sqrt((A/J)^2 + 4 h/A), the speed bound not active; within 0.1 %
+    design = solve_design(load_problem(KNOWN / "min_time_accel_jerk.toml"))
+    a, j = _a_max(), 1e6
+    t_move = a / j + math.sqrt((a / j) ** 2 + 4 * 0.010 / a)
+    assert design.status == "optimal"
+    for move in design.moves:
+        assert move.duration == pytest.approx(t_move, rel=1e-3)
+    assert design.objective_value == pytest.approx(20 * t_move, rel=1e-3)
+    # both bounds bind: the torque (acceleration) and the jerk of each move
+    assert "peak torque move 1" in design.notes[0] and "jerk bound move 1" in design.notes[0]
+    # and the jerk bound costs what the closed form says against the parabolic move of min_time.toml
+    assert t_move / math.sqrt(4 * 0.010 / a) == pytest.approx(1.0658, abs=1e-4)
