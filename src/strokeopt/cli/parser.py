@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from .camtable_command import cmd_camtable
 from .commands import (cmd_accuracy, cmd_bench, cmd_kinematics, cmd_laws, cmd_simulate, cmd_size,
                        cmd_tradeoff, cmd_verify)
 from .common import DEFAULT_OUT
@@ -291,6 +292,33 @@ def build_parser() -> argparse.ArgumentParser:
     _simulation_arguments(p)
     _plot_option(p, "verify_<scene>_<spm>spm_<objective>")
     p.set_defaults(run=cmd_verify)
+
+    from ..files.cam_formats import FORMATS
+
+    p = sub.add_parser("camtable", help="a design.json as the cam table a controller loads, checked",
+                       description="Write the stroke of a design (its motor angle over the cam angle) as a cam table "
+                                   "of a controller's format, at equidistant master points: "
+                                   + "; ".join(f"{k}: {v[1]}" for k, v in FORMATS.items())
+                                   + ". The number of points is the fewest that keep the interpolated position "
+                                   "within --tolerance, or --points. --check reads the file back, interpolates it "
+                                   "as the format's controller does, reports the largest position, velocity and "
+                                   "acceleration deviation from the verified stroke, and re-simulates the design "
+                                   "with the interpolated stroke (the verified pipeline's verdict); exit code 1 when "
+                                   "it fails.",
+                       epilog="Example: strokeopt solve problems/deco2000_needle_bar.toml --out out && strokeopt "
+                              "camtable out/design.json --format xyva --out out/cam_xyva.csv --check")
+    p.add_argument("file", metavar="DESIGN.json", help="a design file written by 'strokeopt solve --out DIR'")
+    p.add_argument("--problem", help="problem file (default: the problem_file recorded in the design)")
+    p.add_argument("--format", required=True, choices=list(FORMATS), help="the controller's table format")
+    p.add_argument("--out", dest="out_file", required=True, metavar="FILE", help="the table file to write")
+    p.add_argument("--points", type=int, metavar="N", help="points a cam cycle (a divisor of 36000; default: the "
+                                                           "fewest within --tolerance)")
+    p.add_argument("--tolerance", type=float, metavar="MM",
+                   help="largest position deviation of the interpolated table from the verified stroke, in mm of "
+                        "the load (deg for a rotary load); default 0.001 (1 um)")
+    p.add_argument("--check", action="store_true", help="read the file back, measure its deviation and re-simulate")
+    p.add_argument("--json", action="store_true", help="print only JSON on stdout (for scripts)")
+    p.set_defaults(run=cmd_camtable, overrides=[])
 
     p = sub.add_parser("accuracy", parents=[problem], help="handover accuracy: servo loop, belt stretch, encoder",
                        description="Predict how far the bar is from its commanded position at the handover and over "

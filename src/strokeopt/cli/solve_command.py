@@ -190,6 +190,12 @@ def _write_outputs(args, verified, summary: dict, chosen, cam_spec) -> None:
             "comparison": verified.comparison, "drive": chosen, "verdict": verified.verdict,
             "not_judged": summary["not_judged"]}):
         print(f"written {path}", file=stream)
+    formats = getattr(verified.design.settings, "cam_tables", ())
+    if formats:  # [design] cam_tables: the controllers' formats (strokeopt camtable writes and checks one)
+        from ..files.cam_formats import write_tables
+
+        for path, n in write_tables(verified.design, Path(args.out), formats):
+            print(f"written {path} ({n} points a cam cycle)", file=stream)
     info = write_report(gather(verified, summary), Path(args.out) / "report.html")  # `strokeopt report`
     print(f"written {info['report']}", file=stream)
 

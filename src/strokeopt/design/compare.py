@@ -38,15 +38,12 @@ def _stroke_measures(design: Design, stroke: StrokeFunction, samples: int = 20_0
         int_a2 += float(np.sum(k.a**2) * dur / len(t))
         int_j2 += math.inf if math.isinf(pk.j_max) else float(np.sum(k.j**2) * dur / len(t))
     row = {"a_max_m_s2": a_max, "jerk_max_m_s3": j_max, "accel_squared": int_a2, "jerk_squared": int_j2}
-    if design.motor_spec is not None and problem.drive is not None:
-        from ..drive.checks import drive_checks
+    found = stroke_drive_checks(design, stroke, samples)
+    if found is not None:
         from ..drive.load import load_torque
 
         drive, trans = _design_drive(design)
         k = stroke.sample(samples)
-        grooves = design.pulley_teeth if design.pulley_teeth else drive.teeth_range[0]
-        found = drive_checks(design.motor_spec, trans, drive.load, k.t, k.s, k.v, k.a, limits=drive.limits,
-                             belt=drive.belt, grooves=grooves)
         checks = {c.name: c.value for c in found}
         row["_failed"] = [c.name for c in found if c.name in ENFORCED_CHECKS and not c.ok]
         tau = load_torque(design.motor_spec, trans, drive.load, k.s, k.v, k.a).total
@@ -59,6 +56,20 @@ def _stroke_measures(design: Design, stroke: StrokeFunction, samples: int = 20_0
         # a servo's RMS torque and speed; a stepper's demand against its pull-out curve and its step rate
         row.update({key: checks[name] for name, key in _CHECK_MEASURES if name in checks})
     return row
+
+
+def stroke_drive_checks(design: Design, stroke: StrokeFunction, samples: int = 20_001) -> list | None:
+    """The drive package's checks (peak and RMS torque, speed, belt, ...) of ``stroke`` on the design's motor and
+    transmission, on ``samples`` points of the cycle; None without a motor or a ``[drive]``."""
+    if design.motor_spec is None or design.problem.drive is None:
+        return None
+    from ..drive.checks import drive_checks
+
+    drive, trans = _design_drive(design)
+    k = stroke.sample(samples)
+    grooves = design.pulley_teeth if design.pulley_teeth else drive.teeth_range[0]
+    return drive_checks(design.motor_spec, trans, drive.load, k.t, k.s, k.v, k.a, limits=drive.limits,
+                        belt=drive.belt, grooves=grooves)
 
 
 _CHECK_MEASURES = (("rms_torque", "rms_torque_N_m"), ("peak_speed", "peak_speed_rpm"),

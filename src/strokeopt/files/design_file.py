@@ -34,6 +34,7 @@ as ``position / pulley radius`` (0 at the handover position).
 
 from __future__ import annotations
 
+import io
 import json
 import os
 from dataclasses import dataclass
@@ -199,6 +200,28 @@ def design_json(design, resolution_deg: float = 0.1, spec: CamTableSpec | None =
     return to_load_units(out, design.problem.timing.rotary)  # a rotary load: stroke_deg, v_max_rad_s, ...
 
 
+def _cam_units(spec: CamTableSpec) -> dict:
+    units = {name: unit for name, unit, _ in CAM_COLUMNS + CAM_COLUMNS_ROTARY}
+    units[spec.master_column] = "deg" if spec.master_unit == "deg" else "counts"
+    return units
+
+
+def cam_table_csv(design, spec: CamTableSpec, table: dict | None = None) -> str:
+    """The text of ``cam_table.csv``: ``#`` lines stating the cycle, the master axis, the motor, the pulley and
+    every column's unit, the column names, then a row per master point."""
+    table = table if table is not None else cam_table(design, spec=spec)
+    units = _cam_units(spec)
+    what = {name: text for name, _, text in CAM_COLUMNS + CAM_COLUMNS_ROTARY}
+    what[spec.master_column] = "master axis"
+    header = [f"# {line}" for line in cam_table_header(design, spec)]
+    header += [f"# column {c} [{units[c]}]: {what[c]}" for c in table]
+    buffer = io.StringIO()
+    np.savetxt(buffer, np.column_stack(list(table.values())), delimiter=",",
+               header="\n".join(header) + "\n" + ",".join(table), comments="",
+               fmt=[_CAM_FORMATS[c] for c in table])
+    return buffer.getvalue()
+
+
 def write_cam_table(design, out_dir: str | Path, spec: CamTableSpec | None = None) -> list[Path]:
     """Write ``cam_table.csv`` (every column; ``#`` lines stating the cycle, the master axis, the motor,
     the pulley and every column's unit, then the column names) and ``cam_table.txt`` into ``out_dir``.
@@ -211,16 +234,9 @@ def write_cam_table(design, out_dir: str | Path, spec: CamTableSpec | None = Non
     spec = spec or CamTableSpec()
     out = Path(out_dir)
     table = cam_table(design, spec=spec)
-    units = {name: unit for name, unit, _ in CAM_COLUMNS + CAM_COLUMNS_ROTARY}
-    units[spec.master_column] = "deg" if spec.master_unit == "deg" else "counts"
-    what = {name: text for name, _, text in CAM_COLUMNS + CAM_COLUMNS_ROTARY}
-    what[spec.master_column] = "master axis"
-    header = [f"# {line}" for line in cam_table_header(design, spec)]
-    header += [f"# column {c} [{units[c]}]: {what[c]}" for c in table]
+    units = _cam_units(spec)
     p_csv = out / "cam_table.csv"
-    np.savetxt(p_csv, np.column_stack(list(table.values())), delimiter=",",
-               header="\n".join(header) + "\n" + ",".join(table), comments="",
-               fmt=[_CAM_FORMATS[c] for c in table])
+    p_csv.write_text(cam_table_csv(design, spec, table), encoding="utf-8")
     p_txt = out / "cam_table.txt"
     master, slave = table[spec.master_column], table["motor_angle_deg"]
     mfmt = "{:12.0f}" if spec.master_unit == "counts" else "{:12.4f}"

@@ -89,6 +89,8 @@ class DesignSettings:
     #: a catalogue search drops the motors a rigid lower bound of the peak torque rules out before solving
     #: (search/bounds.py; the answer is the exhaustive search's, faster where most motors cannot make the move)
     prune_catalogue: bool = True
+    #: ``cam_tables``: the controller formats ``solve --out`` writes beside design.json (files/cam_formats.py)
+    cam_tables: tuple = ()
 
     @property
     def mesh(self) -> Mesh:
@@ -182,10 +184,28 @@ def parse_design(f, *, file: str = "", rotary: bool = False) -> DesignSettings:
     free = parse_free(f.table("free", required=False))
     pull_out = f.boolean("enforce_pull_out", True)
     prune_catalogue = f.boolean("prune_catalogue", True)
+    cam_tables = _read_cam_tables(f)
     f.finish()
     return DesignSettings(objective, n, d, rest, jerk, from_law, accuracy, motor_choice, pulley, zmin, zmax,
                           check_points, check_tol, refinements, pulley_inertia, options, contact, free, pull_out,
-                          reserve, law_spm, prune_catalogue=prune_catalogue)
+                          reserve, law_spm, prune_catalogue=prune_catalogue, cam_tables=cam_tables)
+
+
+#: The cam-table formats of controllers strokeopt writes (files/cam_formats.py holds what each is).
+CAM_TABLE_FORMATS = ("csv", "xyva", "poly5", "segments")
+
+
+def _read_cam_tables(f) -> tuple:
+    """``cam_tables = ["xyva", "poly5"]``: formats from :data:`CAM_TABLE_FORMATS`, each once."""
+    value = f.raw("cam_tables", [])
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise f.error("cam_tables", f"must be a list of format names ({', '.join(CAM_TABLE_FORMATS)}), got {value!r}")
+    for name in value:
+        if name not in CAM_TABLE_FORMATS:
+            raise f.error("cam_tables", f"unknown format {name!r}; choose from {', '.join(CAM_TABLE_FORMATS)}")
+    if len(set(value)) != len(value):
+        raise f.error("cam_tables", "names a format twice")
+    return tuple(value)
 
 
 def _dotted(prefix: str, table: dict) -> dict:

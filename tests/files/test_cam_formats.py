@@ -1,0 +1,156 @@
+"""Cam tables for controllers (``strokeopt camtable``, files/cam_formats.py): each format written, read back,
+interpolated as its controller does and checked against the verified stroke; the interpolated stroke judged
+by the verified pipeline."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from strokeopt.cli.main import main
+from strokeopt.design.transcription.settings import CAM_TABLE_FORMATS
+from strokeopt.files import cam_formats as cf
+
+
+def test_the_formats_are_the_ones_a_problem_file_may_ask_for():
+    assert tuple(cf.FORMATS) == CAM_TABLE_FORMATS
+
+
+def test_quintic_segments_reproduce_a_quintic_and_meet_their_points():
+    # a fifth-order polynomial over the whole cycle is reproduced exactly by the quintic through its own
+    # position, velocity and acceleration at the points; straight lines meet the points only
+    n = 36
+    master = np.arange(n + 1) * (360.0 / n)
+    poly = np.polynomial.Polynomial([3.0, -0.2, 1e-3, 4e-6, -2e-8, 3e-11])
+    points = (poly(master), poly.deriv(1)(master), poly.deriv(2)(master))
+    fine = np.linspace(0.0, 359.9, 3001)
+    p, d1, d2 = cf.segments(points, "quintic").evaluate(fine)
+    assert np.allclose(p, poly(fine), atol=1e-9)
+    assert np.allclose(d1, poly.deriv(1)(fine), atol=1e-9)
+    assert np.allclose(d2, poly.deriv(2)(fine), atol=1e-9)
+    lin, slope, curvature = cf.segments(points, "linear").evaluate(master[:-1] + 5.0)
+    assert np.allclose(lin, (poly(master[:-1]) + poly(master[1:])) / 2)  # the midpoint of each chord
+    assert np.all(curvature == 0.0)
+
+
+@pytest.fixture(scope="module")
+def design(reference_written):
+    from strokeopt.design.result import design_from_data
+    from strokeopt.files.design_file import read_design
+    from strokeopt import load_problem
+
+    data, stroke = read_design(reference_written.out / "design.json")
+    problem = load_problem(data["problem_file"]).with_spm(float(data["spm"]))
+    return design_from_data(problem, data, stroke)
+
+
+def test_deviation_falls_with_the_points_as_each_interpolation_should(design):
+    # linear interpolation errs by a'' h^2/8: a quarter for twice the points; the quintic far faster
+    lin = [cf.deviation(design, cf.design_segments(design, "csv", n)[0]).position_deg for n in (360, 720)]
+    assert lin[1] / lin[0] == pytest.approx(0.25, rel=0.05)
+    quint = [cf.deviation(design, cf.design_segments(design, "xyva", n)[0]).position_deg for n in (360, 720)]
+    assert quint[1] / quint[0] < 0.25 and quint[0] < lin[0] / 100
+
+
+def test_the_load_deviation_is_the_motor_angle_over_the_pulley_radius(design):
+    d = cf.deviation(design, cf.design_segments(design, "csv", 720)[0])
+    assert d.position_load == pytest.approx(np.radians(d.position_deg) * design.radius, rel=1e-3)
+
+
+@pytest.mark.parametrize("fmt", ["xyva", "poly5", "segments", "csv"])
+def test_camtable_check_of_the_reference_design(fmt, reference_written, tmp_path, capsys):
+    # the issue's acceptance: each format within 1 um at its default number of points, saying how many
+    out = tmp_path / f"cam_{fmt}.csv"
+    code = main(["camtable", str(reference_written.out / "design.json"), "--format", fmt, "--out", str(out),
+                 "--check", "--json"])
+    report = json.loads(capsys.readouterr().out)
+    assert code == 0 and report["status"] == "ok"
+    check = report["check"]
+    assert check["position_load_um"] <= 1.0 and check["within_tolerance"]
+    assert report["points"] == report["points_needed"]  # the fewest within 1 um (test_points_needed_is_the_fewest)
+    assert report["resimulated"]["ok"] and "met: handover error" in report["resimulated"]["verdict"]
+    # the re-simulated handover error is the verified one's within what the table changes (0.0415 mm)
+    assert report["resimulated"]["handover_unit"] == "mm"
+    assert report["resimulated"]["handover_error"] == pytest.approx(0.0415, rel=0.05)
+    if fmt == "csv":  # linear: every column of cam_table.csv, and no acceleration between the points
+        assert check["acceleration_share_of_peak"] == pytest.approx(1.0, rel=1e-6)
+        assert report["drive_checks"] == []  # judged on the design: a linear table has no inertia torque
+    else:
+        assert check["acceleration_share_of_peak"] < 0.1
+        rows = {c["name"]: c for c in report["drive_checks"]}
+        assert all(c["ok"] for c in rows.values())
+        # the table's stroke on the design's drive: the design's peak torque moved by what the quintic's
+        # acceleration deviation (5.9 % of the peak at 180 points) moves the inertia torque: 0.9077 N m
+        peak = rows["peak_torque"]
+        assert peak["design_value"] == pytest.approx(0.8596, rel=1e-3)
+        assert abs(peak["value"] / peak["design_value"] - 1) <= 1.05 * check["acceleration_share_of_peak"]
+
+
+def test_points_needed_is_the_fewest(design):
+    n = cf.points_needed(design, "xyva", 1e-6)
+    smaller = cf.POINT_CHOICES[cf.POINT_CHOICES.index(n) - 1]
+    assert cf.deviation(design, cf.design_segments(design, "xyva", n)[0]).position_load <= 1e-6
+    assert cf.deviation(design, cf.design_segments(design, "xyva", smaller)[0]).position_load > 1e-6
+
+
+def test_too_few_points_fail_the_check(reference_written, tmp_path, capsys):
+    out = tmp_path / "coarse.csv"
+    code = main(["camtable", str(reference_written.out / "design.json"), "--format", "csv", "--points", "90",
+                 "--out", str(out), "--check"])
+    text = capsys.readouterr()
+    assert code == 1 and "NOT within 1 um" in text.out and "check failed" in text.err
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--format", "xyva", "--points", "100000"], "--points: 100000 is not one of"),
+    (["--format", "xyva", "--tolerance", "-1"], "--tolerance: must be a positive number"),
+    (["--format", "xml"], "invalid choice: 'xml'"),
+])
+def test_bad_options(argv, message, reference_written, tmp_path, capsys):
+    argv = ["camtable", str(reference_written.out / "design.json"), "--out", str(tmp_path / "t.csv"), *argv]
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse's own refusal (an unknown format)
+        code = exc.code
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and "Traceback" not in err
+
+
+def test_a_damaged_table_is_refused_naming_the_column(reference_written, tmp_path):
+    from strokeopt.errors import ProblemError
+
+    out = tmp_path / "t.csv"
+    assert main(["camtable", str(reference_written.out / "design.json"), "--format", "xyva", "--out", str(out)]) == 0
+    lines = out.read_text().splitlines()
+    damaged = [*lines[:-3], lines[-3].rsplit(",", 1)[0] + ",abc", *lines[-2:]]
+    out.write_text("\n".join(damaged))
+    with pytest.raises(ProblemError, match="slave_acceleration_deg_per_deg2.*not a number"):
+        cf.read_segments(out, "xyva")
+    out.write_text("\n".join(lines[:-6] + lines[-5:]))  # a point left out: the master steps are uneven
+    with pytest.raises(ProblemError, match="not .* equidistant"):
+        cf.read_segments(out, "xyva")
+
+
+def test_solve_out_writes_the_formats_the_problem_asks_for(design, tmp_path):
+    # [design] cam_tables: solve --out writes cam_<format>.csv beside design.json (cli/solve_command.py)
+    written = cf.write_tables(design, tmp_path, ("xyva", "segments"))
+    assert [p.name for p, _ in written] == ["cam_xyva.csv", "cam_segments.csv"]
+    for (path, n), fmt in zip(written, ("xyva", "segments")):
+        assert n == cf.points_needed(design, fmt, 1e-6)
+        assert cf.deviation(design, cf.read_segments(path, fmt)).position_load <= 1e-6
+
+
+@pytest.mark.parametrize("value, message", [
+    ('["xml"]', "unknown format 'xml'"),
+    ('"xyva"', "must be a list of format names"),
+    ('["xyva", "xyva"]', "names a format twice"),
+])
+def test_bad_cam_tables_field(reference_path, value, message):
+    from strokeopt import ProblemError, load_problem
+
+    with pytest.raises(ProblemError, match=message) as exc:
+        load_problem(reference_path, [f"design.cam_tables={value}"])
+    assert exc.value.field == "design.cam_tables"
+    assert load_problem(reference_path, ['design.cam_tables=["poly5"]']).design.cam_tables == ("poly5",)
