@@ -154,3 +154,80 @@ def test_bad_cam_tables_field(reference_path, value, message):
         load_problem(reference_path, [f"design.cam_tables={value}"])
     assert exc.value.field == "design.cam_tables"
     assert load_problem(reference_path, ['design.cam_tables=["poly5"]']).design.cam_tables == ("poly5",)
+
+
+# --------------------------------------------------------------------------- --stroke FILE.csv: a motion made elsewhere
+
+def test_a_cam_table_read_as_a_stroke_is_the_design_stroke(design, reference_written):
+    # cam_table.csv (3600 points, positions to 1e-6 mm) joined by the periodic cubic spline: the design's stroke
+    # within 0.01 um, its acceleration within 1 % of the peak (what a table's six digits leave of it)
+    stroke = cf.read_stroke(reference_written.out / "cam_table.csv", design.problem, design.spm)
+    assert len(stroke.pieces) == len(design.problem.timing.intervals)  # a piece per interval, as a law's
+    t = np.linspace(0.0, stroke.period, 40001)
+    got, want = stroke.evaluate(t), design.stroke.evaluate(t)
+    assert np.max(np.abs(got.s - want.s)) < 1e-8
+    assert np.max(np.abs(got.a - want.a)) < 0.01 * np.max(np.abs(want.a))
+
+
+def test_a_point_table_of_another_spacing_is_the_spline_through_it(reference, tmp_path):
+    # uneven master steps: the periodic cubic spline through the points (scipy's), read by the stroke exactly
+    from scipy.interpolate import CubicSpline
+
+    angles = np.array([0, 10, 25, 45, 70, 100, 140, 180, 220, 260, 300, 330])
+    mm = np.array([0, -1, -8, -20, -30, -31, -31, -25, -12, -3, 0, 0.5])
+    path = tmp_path / "points.csv"
+    path.write_text("# a motion from elsewhere\ncam_angle_deg,position_mm\n"
+                    + "\n".join(f"{a},{p}" for a, p in zip(angles, mm)) + "\n")
+    stroke = cf.read_stroke(path, reference, 500)
+    spline = CubicSpline(np.append(angles, 360), np.append(mm, mm[0]) * 1e-3, bc_type="periodic")
+    x = np.linspace(0, 359.9, 1777)
+    k = stroke.evaluate(x / 360 * stroke.period)
+    assert np.allclose(k.s, spline(x), atol=1e-12)
+    assert np.allclose(k.v, spline(x, 1) * 360 / stroke.period, rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("text, field, words", [
+    ("cam_angle_deg,position_mm\n" + "\n".join(f"{a},0" for a in range(0, 360, 90)), "cam_angle_deg", "at least 8"),
+    ("angle,position_mm\n0,0\n", "master", "no master column"),
+    ("cam_angle_deg,position_deg\n0,0\n", "position_mm", "moves a linear load"),
+    ("cam_angle_deg,position_mm\n" + "\n".join(f"{a},0" for a in [5, *range(10, 360, 30)]), "cam_angle_deg",
+     "must start at 0"),
+    ("cam_angle_deg,position_mm\n" + "\n".join(f"{a},0" for a in [*range(0, 300, 30), 20]), "cam_angle_deg",
+     "rise strictly"),
+    ("cam_angle_deg,position_mm\n" + "\n".join(f"{a},{'nan' if a == 60 else 0}" for a in range(0, 360, 30)),
+     "position_mm", "not finite"),
+])
+def test_bad_stroke_tables(reference, tmp_path, text, field, words):
+    from strokeopt import ProblemError
+
+    path = tmp_path / "t.csv"
+    path.write_text(text + "\n")
+    with pytest.raises(ProblemError, match=words) as exc:
+        cf.read_stroke(path, reference)
+    assert exc.value.field == field
+
+
+@pytest.mark.parametrize("command", ["kinematics", "size", "simulate"])
+def test_stroke_option_runs_through_the_commands(command, reference_path, reference_written, capsys):
+    # the acceptance: a --stroke FILE.csv through kinematics, size and simulate
+    table = str(reference_written.out / "cam_table.csv")
+    extra = {"size": ["--motor", "055U2B30", "--pulley-teeth", "24"], "simulate": ["--scene", "release"]}
+    assert main([command, str(reference_path), "--stroke", table, "--json", "--plot", "none",
+                 *extra.get(command, [])]) == 0
+    data = json.loads(capsys.readouterr().out)
+    if command == "kinematics":
+        move = data["moves"][0]
+        assert move["law"] == "table cam_table.csv" and move["a_max_m_s2"] == pytest.approx(257.0, rel=0.01)
+    elif command == "size":  # the design's drive and stroke: its peak torque, 0.8596 N m
+        assert data["candidates"][0]["peak_torque_N_m"] == pytest.approx(0.8596, rel=0.01)
+    else:  # the design's release scene: the impact at 2.607 m/s (the verified design's)
+        assert data["impact_velocity_m_s"] == pytest.approx(2.607, rel=0.01)
+
+
+def test_stroke_option_refuses_a_second_stroke(reference_path, reference_written, capsys):
+    table = str(reference_written.out / "cam_table.csv")
+    assert main(["kinematics", str(reference_path), "--stroke", table, "--law", "poly5", "--plot", "none"]) == 2
+    assert "--stroke: the table is the stroke" in capsys.readouterr().err
+    assert main(["kinematics", str(reference_path), "--stroke", table, "--design",
+                 str(reference_written.out / "design.json"), "--plot", "none"]) == 2
+    assert "give the stroke once" in capsys.readouterr().err

@@ -174,6 +174,15 @@ def _load(args, fix_in_design: bool = False):
         if chi is not None:
             params["chi"] = chi
         problem = problem.with_law(make_law(name, where=("command line", "--law/--chi"), **params))
+    table = getattr(args, "stroke_table", None)
+    if table is not None:  # --stroke FILE.csv: a motion made elsewhere, judged on this problem's drive and model
+        if getattr(args, "design", None) is not None:
+            raise ProblemError("--stroke", "", "give the stroke once: --design (its optimal stroke) or --stroke")
+        if law_name is not None or chi is not None:
+            raise ProblemError("--stroke", "", "the table is the stroke: --law/--chi would not be used")
+        from ..files.cam_formats import read_stroke
+
+        args.design_stroke = read_stroke(table, problem)
     if getattr(args, "design_data", None) is not None:  # a design of another problem is refused here
         from ..files.design_file import check_design_fits
 

@@ -28,9 +28,10 @@ def _verbose_option(p: argparse.ArgumentParser, what: str) -> None:
     p.add_argument("--verbose", action="store_true", help=f"print {what}")
 
 
-def _drive_options(p: argparse.ArgumentParser, design: str, repeatable: bool = False, rate: bool = True) -> None:
+def _drive_options(p: argparse.ArgumentParser, design: str, repeatable: bool = False, rate: bool = True,
+                   stroke: bool = False) -> None:
     """--motor, --pulley-teeth and --design: the same meaning on every command (cli/common.apply_drive_options);
-    ``rate``: the command has --spm (the design's rate is used)."""
+    ``rate``: the command has --spm (the design's rate is used); ``stroke``: also --stroke FILE.csv."""
     more = " (repeatable: only these)" if repeatable else ""
     p.add_argument("--motor", action="append" if repeatable else "store", metavar="NAME",
                    help=f"catalogue motor of the drive{more}; the same as --set drive.motor=NAME")
@@ -40,6 +41,11 @@ def _drive_options(p: argparse.ArgumentParser, design: str, repeatable: bool = F
                    help=f"a design.json of 'strokeopt solve --out': its {'stitch rate, ' if rate else ''}motor and "
                         f"pulley; {design}. A {'--spm, ' if rate else ''}--motor, --pulley-teeth or --set asking for "
                         "other values is an error")
+    if stroke:
+        p.add_argument("--stroke", dest="stroke_table", metavar="FILE.csv",
+                       help="a motion made elsewhere as the stroke: a CSV cam table with cam_angle_deg (0 up to below "
+                            "360) and position_mm (position_deg for a rotary load) columns, joined by a periodic "
+                            "cubic spline (cam_table.csv of 'solve --out' is one); it replaces the problem's law")
     p.set_defaults(drive_lists=repeatable)
 
 
@@ -155,7 +161,7 @@ def build_parser() -> argparse.ArgumentParser:
                        epilog="Examples: strokeopt kinematics problems/deco2000_needle_bar.toml --spm 600 --law poly5; "
                               "strokeopt kinematics problems/loom_beatup_sixbar.toml --json")
     _stroke_options(p)
-    _drive_options(p, "the design's optimal stroke replaces the problem's law")
+    _drive_options(p, "the design's optimal stroke replaces the problem's law", stroke=True)
     _plot_option(p, "kinematics_<spm>spm_<law>")
     p.set_defaults(run=cmd_kinematics)
 
@@ -176,7 +182,7 @@ def build_parser() -> argparse.ArgumentParser:
                               "Exit code 1 (status 'infeasible') when no pair passes every check; the verdict line "
                               "names the binding limit.")
     _stroke_options(p)
-    _drive_options(p, "its optimal stroke replaces the problem's law", repeatable=True)
+    _drive_options(p, "its optimal stroke replaces the problem's law", repeatable=True, stroke=True)
     p.add_argument("--catalogue", action="append", default=[], metavar="FILE",
                    help="an extra catalogue file (motors, pulleys, belts; repeatable)")
     p.add_argument("--max-spm", action="store_true",
@@ -259,7 +265,7 @@ def build_parser() -> argparse.ArgumentParser:
                               "strokeopt simulate problems/deco2000_needle_bar.toml --set "
                               "model.springs.k2.stiffness_N_m=1240 --set model.contacts.c32.gap_mm=6.5")
     _stroke_options(p, sweep=True)
-    _drive_options(p, "the design's optimal stroke is simulated (the contact model itself has no motor or belt)")
+    _drive_options(p, "the design's optimal stroke is simulated (the contact model itself has no motor or belt)", stroke=True)
     _verbose_option(p, "the integrator's statistics")
     _simulation_arguments(p)
     p.add_argument("--study", choices=("tolerance",),
@@ -334,7 +340,7 @@ def build_parser() -> argparse.ArgumentParser:
     _stroke_options(p)
     p.add_argument("--compare-laws", action="store_true",
                    help="also report handover error and residual vibration of every classic law")
-    _drive_options(p, "the prediction is for its optimal stroke, and the classic laws follow as a table")
+    _drive_options(p, "the prediction is for its optimal stroke, and the classic laws follow as a table", stroke=True)
     _plot_option(p, "accuracy_<spm>spm_<law>_<motor>")
     p.set_defaults(run=cmd_accuracy)
 

@@ -52,12 +52,14 @@ CHECK_SAMPLES = 8
 
 @dataclass(frozen=True)
 class Segments:
-    """The slave over one cam cycle as ``n`` polynomial segments on equidistant master positions.
+    """A quantity over one cam cycle as ``n`` polynomial segments of the master (deg, one cycle = 360).
 
-    ``coeffs[i]`` are ``c0..c5`` of ``slave = sum c_k u^k`` on segment ``i`` (master ``i*h`` to ``(i+1)*h``
-    deg, ``u`` its normalised position); linear segments have ``c2..c5 = 0``."""
+    ``coeffs[i]`` are ``c0..c5`` of ``value = sum c_k u^k`` on segment ``i``, ``u`` its normalised master
+    position; linear segments have ``c2..c5 = 0``. ``breaks``: the ``n + 1`` master positions the segments
+    join at (None: equidistant, ``i * 360/n``)."""
 
-    coeffs: np.ndarray  # (n, 6), slave in deg
+    coeffs: np.ndarray  # (n, 6)
+    breaks: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -67,16 +69,22 @@ class Segments:
     def step_deg(self) -> float:
         return 360.0 / self.n
 
+    @property
+    def edges(self) -> np.ndarray:
+        return np.arange(self.n + 1) * self.step_deg if self.breaks is None else np.asarray(self.breaks, float)
+
     def evaluate(self, master_deg) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """slave [deg], dslave/dmaster [deg/deg], d2slave/dmaster2 [deg/deg^2] at ``master_deg`` (mod 360)."""
-        m = np.mod(np.asarray(master_deg, float), 360.0)
-        idx = np.minimum((m / self.step_deg).astype(int), self.n - 1)
-        u = m / self.step_deg - idx
+        """The value, d/dmaster and d2/dmaster2 (per deg, per deg^2) at ``master_deg`` (mod 360)."""
+        m = np.mod(np.atleast_1d(np.asarray(master_deg, float)), 360.0)
+        edges = self.edges
+        idx = np.clip(np.searchsorted(edges, m, side="right") - 1, 0, self.n - 1)
+        width = np.diff(edges)[idx]
+        u = (m - edges[idx]) / width
         c = self.coeffs[idx]
         powers = u[:, None] ** np.arange(6)
         p = np.sum(c * powers, axis=1)
-        d1 = np.sum(c[:, 1:] * np.arange(1, 6) * powers[:, :5], axis=1) / self.step_deg
-        d2 = np.sum(c[:, 2:] * np.array([2, 6, 12, 20]) * powers[:, :4], axis=1) / self.step_deg**2
+        d1 = np.sum(c[:, 1:] * np.arange(1, 6) * powers[:, :5], axis=1) / width
+        d2 = np.sum(c[:, 2:] * np.array([2, 6, 12, 20]) * powers[:, :4], axis=1) / width**2
         return p, d1, d2
 
 
@@ -271,25 +279,94 @@ def _checked(path, master, table: Segments, closed: bool) -> Segments:
 
 # --------------------------------------------------------------------------- the table as the stroke a drive runs
 
+def segments_expression(table: Segments, master):
+    """The segments' value as a CasADi expression of the symbol ``master`` [deg, in 0..360]: the segment index
+    (``floor`` on an equidistant table, a count of the breaks passed on another; either has derivative zero)
+    picks each coefficient from a lookup, so velocity and acceleration are the polynomials' own."""
+    n = table.n
+    if table.breaks is None:
+        idx = ca.fmin(ca.fmax(ca.floor(master / table.step_deg), 0), n - 1)
+        start, width = idx * table.step_deg, table.step_deg
+    else:
+        edges = table.edges
+        idx = ca.fmin(sum(master >= float(e) for e in edges[1:-1]), n - 1) if n > 1 else 0 * master
+        start, width = _lookup("start", edges[:-1], idx), _lookup("width", np.diff(edges), idx)
+    u = (master - start) / width
+    return sum(_lookup(f"c{k}", table.coeffs[:, k], idx) * u**k for k in range(6))
+
+
+def _lookup(name: str, values: np.ndarray, idx):
+    """``values[idx]`` for a symbolic whole ``idx`` (a linear interpolant read at its nodes)."""
+    values = np.asarray(values, float)
+    if len(values) == 1:
+        values = np.array([values[0], values[0]])
+    return ca.interpolant(name, "linear", [list(range(len(values)))], values.tolist())(idx)
+
+
 def segment_stroke(design, table: Segments, label: str) -> StrokeFunction:
-    """The stroke the drive runs from ``table``: the load's position through the design's transmission of the
-    interpolated motor angle, one CasADi expression over the cycle (``floor`` picks the segment; its derivative
-    is zero, so velocity and acceleration are the polynomials')."""
+    """The stroke the drive runs from ``table`` (the motor angle, deg): the load's position through the design's
+    transmission of the interpolated motor angle, one CasADi expression over the cycle."""
     from .design_file import design_transmission
 
     period = design.stroke.period
-    n = table.n
+    position = design_transmission(design).position
+    return _interval_stroke(design.problem, design.spm, lambda t: position(
+        segments_expression(table, t * (360.0 / period)) * (math.pi / 180.0)), label)
+
+
+def _interval_stroke(problem, spm: float, position, label: str) -> StrokeFunction:
+    """A stroke of ``problem`` at ``spm`` whose position is the CasADi expression ``position(t)`` of the cycle
+    time, cut into a piece per interval of the timing (so every per-interval table reads it as a law's)."""
+    sch = problem.timing.schedule(spm)
     tau = ca.SX.sym("tau")
-    x = tau * (n / period)  # in segments
-    idx = ca.fmin(ca.fmax(ca.floor(x), 0), n - 1)
-    u = x - idx
-    grid = [list(range(n))] if n > 1 else [[0, 1]]
-    phi_deg = 0
-    for k in range(6):
-        col = table.coeffs[:, k]
-        values = col if n > 1 else np.array([col[0], col[0]])
-        lookup = ca.interpolant(f"c{k}", "linear", grid, values.tolist())
-        phi_deg = phi_deg + lookup(idx) * u**k
-    s = design_transmission(design).position(phi_deg * (math.pi / 180.0))
-    piece = Piece(0.0, period, ca.Function("cam_table", [tau], [s]), label)
-    return StrokeFunction(period, [piece], label)
+    pieces = [Piece(float(t0), float(dur), ca.Function("stroke_table", [tau], [position(float(t0) + tau)]), label)
+              for t0, dur in zip(sch.t_start, sch.duration)]
+    return StrokeFunction(sch.period, pieces, label)
+
+
+# --------------------------------------------------------------------------- a stroke made elsewhere, as a table
+
+#: The master columns a stroke table may name (cam angle, deg, one cam cycle = 360).
+MASTER_COLUMNS = ("cam_angle_deg", "master_deg", "master_position_deg")
+#: The fewest points a stroke table may have (a cubic spline through fewer says little of a cycle).
+STROKE_POINTS_MIN = 8
+
+
+def read_stroke(path, problem, spm: float | None = None) -> StrokeFunction:
+    """A motion made elsewhere as a stroke of ``problem`` at ``spm``: a CSV with a master column (cam angle,
+    deg, from 0 up to below 360) and the load's position (``position_mm``, or ``position_deg`` for a rotary
+    load), ``#`` lines ignored -- ``cam_table.csv`` of ``solve --out`` is one. The points are joined by the
+    periodic cubic spline through them (position, speed and acceleration continuous over the cycle)."""
+    from scipy.interpolate import CubicSpline
+
+    path = Path(path)
+    if not path.is_file():
+        raise ProblemError(str(path), "", "no such file (a CSV cam table: cam_angle_deg and position_mm columns)")
+    names, rows = _rows(path)
+    rotary = problem.timing.rotary
+    master = next((n for n in MASTER_COLUMNS if n in names), None)
+    if master is None:
+        raise ProblemError(str(path), "master", f"no master column: name one of {', '.join(MASTER_COLUMNS)} (the "
+                                                f"file has {', '.join(names)})")
+    pos, other = ("position_deg", "position_mm") if rotary else ("position_mm", "position_deg")
+    if pos not in names:
+        why = f" ({problem.file} moves a {'rotary' if rotary else 'linear'} load)" if other in names else ""
+        raise ProblemError(str(path), pos, f"no such column{why}; the file has {', '.join(names)}")
+    angle, value = _column(path, names, rows, master), _column(path, names, rows, pos)
+    if len(angle) < STROKE_POINTS_MIN:
+        raise ProblemError(str(path), master, f"{len(angle)} points; a cycle needs at least {STROKE_POINTS_MIN}")
+    if angle[0] != 0.0 or np.any(np.diff(angle) <= 0) or angle[-1] >= 360.0:
+        raise ProblemError(str(path), master, "must start at 0 and rise strictly to below 360 deg (one cam cycle; "
+                                              "the cycle closes on the first point)")
+    x = np.append(angle, 360.0)
+    y = np.append(value, value[0]) * (math.pi / 180.0 if rotary else 1e-3)
+    spline = CubicSpline(x, y, bc_type="periodic")
+    width = np.diff(x)
+    coeffs = np.zeros((len(angle), 6))
+    for k in range(4):  # scipy holds (x - x_i)^(3 - row); the segments hold u^k with u = (x - x_i)/width
+        coeffs[:, k] = spline.c[3 - k] * width**k
+    table = Segments(coeffs, None if np.allclose(width, width[0], rtol=0, atol=1e-9) else x)
+    spm = problem.spm if spm is None else float(spm)
+    period = problem.timing.period(spm)
+    return _interval_stroke(problem, spm, lambda t: segments_expression(table, t * (360.0 / period)),
+                            f"table {path.name}")
