@@ -27,7 +27,7 @@ from .transmissions import TRANSMISSIONS
 from .errors import ProblemError
 from .io.cycle import CYCLE_NOUN, STITCH, MachineCycle
 from .io.fields import _REQUIRED, Fields, apply_overrides
-from .motion.laws import LAW_NAMES, LAW_PARAMETERS, MotionLaw, make_law
+from .motion.laws import LAW_CHOICES, LAW_PARAMETERS, MotionLaw, make_law, points_law
 from .motion.timing import INTERVAL_TIMES, SPM_RANGE, Interval, TimingDiagram
 from .servo.kernel import ServoErrorTerm
 from .servo.settings import parse_servo
@@ -171,7 +171,7 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
 
 def _read_law(f: Fields, key: str, default: MotionLaw | None = None) -> MotionLaw:
     """A law name plus its parameters, read from the same table (``law = "modified_sine"``, ``chi = 0.095``)."""
-    name = f.string(key, None if default is not None else _REQUIRED, choices=LAW_NAMES)
+    name = f.string(key, None if default is not None else _REQUIRED, choices=LAW_CHOICES)
     params = {}
     for pname in LAW_PARAMETERS:
         if f.has(pname):
@@ -244,12 +244,17 @@ def _read_timing(f: Fields, default_law: MotionLaw, revs: float) -> TimingDiagra
                 raise row.error("span_deg", f"a move ({stroke / to_si:g} {ukey}) needs a span of at least "
                                             f"{MOVE_SPAN_MIN_DEG:g} deg, got {span:g} deg")
             direction = row.string("direction", choices=("up", "down"))
-            law = _read_law(row, "law", default_law)
+            if row.has("law") and row.raw("law") == "points":  # the move's own points (motion/laws.points_law)
+                law = points_law(row.raw("angles_deg"), row.raw(f"positions_{ukey}"), span, stroke / to_si,
+                                 row.number("rest_order", 2, integer=True, min=1, max=3),
+                                 where=(row.file, row.path), positions_key=f"positions_{ukey}")
+            else:
+                law = _read_law(row, "law", default_law)
             n_moves += 1
             signed = stroke if direction == "up" else -stroke
             move_index = n_moves
         else:
-            for key in ("direction", "law", "end", *LAW_PARAMETERS):
+            for key in ("direction", "law", "end", "angles_deg", f"positions_{ukey}", "rest_order", *LAW_PARAMETERS):
                 if row.has(key):
                     raise row.error(key, f"a dwell (stroke_{ukey} = 0) has no " + key)
             if handover:

@@ -231,3 +231,23 @@ def test_stroke_option_refuses_a_second_stroke(reference_path, reference_written
     assert main(["kinematics", str(reference_path), "--stroke", table, "--design",
                  str(reference_written.out / "design.json"), "--plot", "none"]) == 2
     assert "give the stroke once" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["kinematics", "size", "simulate"])
+def test_a_points_law_file_runs_through_the_commands(command, write_problem, capsys):
+    # the acceptance: a law = "points" file through kinematics, size and simulate
+    path = write_problem(lambda text: text.replace(
+        'handover = true                   # ends at the needle handover position\npublished_time_s = 0.0252\n',
+        'handover = true\npublished_time_s = 0.0252\nlaw = "points"\nangles_deg = [6, 12, 18.7, 25, 31]\n'
+        'positions_mm = [1.6, 8.0, 16.0, 24.0, 30.4]\n', 1))
+    extra = {"size": ["--motor", "055U2B30"], "simulate": ["--scene", "release"]}
+    assert main([command, str(path), "--json", "--plot", "none", *extra.get(command, [])]) == 0
+    data = json.loads(capsys.readouterr().out)
+    if command == "kinematics":
+        move = data["moves"][0]
+        assert move["law"] == "points (5 points, rest order 2)" and move["stroke_mm"] == pytest.approx(32.0)
+        assert data["moves"][1]["law"].startswith("modified_sine")
+    elif command == "size":
+        assert data["candidates"][0]["motor"] == "055U2B30" and data["candidates"][0]["peak_torque_N_m"] > 0
+    else:
+        assert data["stroke"].startswith("modified_sine (chi = 0.095), points") and data["impact_velocity_m_s"] > 0

@@ -233,3 +233,59 @@ def test_laws_in_a_problem_file(tmp_path, reference_path):
     path.write_text(text)
     law = load_problem(path).default_law
     assert (law.name, law.params) == ("s_curve", {"constant_speed_share": 0.25, "ramp_share": 0.8})
+
+
+# --------------------------------------------------------------------------- a move's own points
+
+def test_points_law_through_a_quintics_points_is_that_quintic():
+    # the degree-5 B-spline with v = a = 0 at both ends is unique; the 3-4-5 polynomial is one, so through its
+    # own points the points law is the 3-4-5 law (on any span and stroke)
+    from strokeopt.motion.laws import points_law
+
+    poly5 = make_law("poly5")
+    x = np.array([0.1, 0.3, 0.45, 0.7, 0.9])
+    law = points_law(x * 40.0, poly5(x) * 12.0, 40.0, 12.0)
+    grid = np.linspace(0, 1, 1001)
+    assert np.allclose(law(grid), poly5(grid), atol=1e-12)
+    c = law.characteristics
+    assert (c.C_v, c.C_a, c.C_j) == pytest.approx((1.875, 10 / math.sqrt(3), 60.0), rel=1e-9)
+
+
+@pytest.mark.parametrize("rest_order, polynomial", [(1, "cubic"), (2, "poly5"), (3, "poly7")])
+def test_points_law_meets_its_dwells_with_its_rest_order(rest_order, polynomial):
+    # through the points of the polynomial of its rest order (3-2, 3-4-5, 4-5-6-7) the spline is that polynomial
+    from strokeopt.motion.laws import points_law
+
+    x = np.array([5.0, 20.0, 30.0]) / 36.0
+    y = make_law(polynomial)(x)
+    law = points_law(x * 36.0, y * 10.0, 36.0, 10.0, rest_order)
+    grid = np.linspace(0, 1, 501)
+    assert np.allclose(law(grid), make_law(polynomial)(grid), atol=1e-11)
+    ends = law.derivatives([0.0, 1.0], order=4)
+    assert np.allclose(ends[0], [0.0, 1.0], atol=1e-12)
+    for k in range(1, rest_order + 1):  # the first rest_order derivatives vanish at both ends
+        assert np.allclose(ends[k], 0.0, atol=1e-9)
+    assert law.characteristics.continuity == rest_order
+
+
+@pytest.mark.parametrize("angles, positions, field, words", [
+    ([10.0, 20.0], [2.0], "positions_mm", "1 positions for 2 angles"),
+    ([0.0, 20.0], [2.0, 5.0], "angles_deg", "inside the move"),
+    ([20.0, 10.0], [2.0, 5.0], "angles_deg", "rise strictly"),
+    ([10.0, 20.0], [5.0, 2.0], "positions_mm", "must rise from 0"),
+    ([10.0, 20.0], [2.0, 10.0], "positions_mm", "strictly between its ends"),
+    ([10.0, "x"], [2.0, 5.0], "angles_deg", "list of finite numbers"),
+    ([4.0, 8.0, 28.0, 32.0], [0.5, 9.5, 9.6, 9.9], "positions_mm", "goes back near"),
+])
+def test_points_law_refuses_points_that_are_no_rise(angles, positions, field, words):
+    from strokeopt.motion.laws import points_law
+
+    with pytest.raises(ProblemError, match=words) as exc:
+        points_law(angles, positions, 36.0, 10.0, where=("f.toml", "timing.intervals[2]"),
+                   positions_key="positions_mm")
+    assert exc.value.field == f"timing.intervals[2].{field}"
+
+
+def test_points_law_is_a_moves_own(reference_path):
+    with pytest.raises(ProblemError, match="a move's own points"):
+        make_law("points")

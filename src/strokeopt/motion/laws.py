@@ -109,6 +109,25 @@ def _modified_sine_cv(x, chi, constant_speed_share):
     return mirrored_law(x, with_constant_speed(scca_half(2 * chi, 0.0), constant_speed_share))
 
 
+def _points(x, points_x, points_y, rest_order):
+    """A rise through given points: the B-spline of degree ``2 rest_order + 1`` through ``(0, 0)``, the points and
+    ``(1, 1)`` whose first ``rest_order`` derivatives vanish at both ends (it meets the dwells as a law of that
+    rest order does), as its polynomial pieces."""
+    from scipy.interpolate import PPoly, make_interp_spline
+
+    r = int(rest_order)
+    xs, ys = np.array([0.0, *points_x, 1.0]), np.array([0.0, *points_y, 1.0])
+    ends = [(k, 0.0) for k in range(1, r + 1)]
+    pp = PPoly.from_spline(make_interp_spline(xs, ys, k=2 * r + 1, bc_type=(ends, ends)))
+    keep = [i for i in range(len(pp.x) - 1) if pp.x[i + 1] > pp.x[i]]
+    expr = None
+    for i in reversed(keep):
+        u = x - pp.x[i]
+        piece = sum(float(c) * u ** (len(pp.c) - 1 - k) for k, c in enumerate(pp.c[:, i]))
+        expr = piece if expr is None else ca.if_else(x < pp.x[i + 1], piece, expr)
+    return expr
+
+
 @dataclass(frozen=True)
 class _LawSpec:
     title: str
@@ -118,6 +137,7 @@ class _LawSpec:
     fixed: dict = field(default_factory=dict)  # a named member of a family: the family's parameters it fixes
     check: object = lambda **p: None  # a message where the parameters together are not a law
     symmetric: bool = True  # y(1 - x) = 1 - y(x)
+    table: bool = False  # its parameters are a move's points (points_law), not numbers of a unit law
 
 
 def _scca_check(sine_share, constant_accel_share):
@@ -178,16 +198,20 @@ _LAWS: dict[str, _LawSpec] = {
         breaks=lambda chi, constant_speed_share: joints(
             with_constant_speed(scca_half(2 * chi, 0.0), constant_speed_share))),
     "double_harmonic": _LawSpec("double harmonic (gentle start, hard end)", _double_harmonic, symmetric=False),
+    "points": _LawSpec("B-spline through a move's points", _points, symmetric=False, table=True,
+                       breaks=lambda points_x, points_y, rest_order: tuple(points_x)),
 }
 
 #: Names of the laws: the thesis's seven in the order it compares them, then the cam handbooks' further ones.
-LAW_NAMES = tuple(_LAWS)
+LAW_NAMES = tuple(name for name, spec in _LAWS.items() if not spec.table)
+#: What a move's ``law`` may name: the laws and ``points`` (a move's own points, :func:`points_law`).
+LAW_CHOICES = tuple(_LAWS)
 #: The laws a design is compared with (solve's table, the report, ``accuracy``): the thesis's seven and the
 #: modified trapezoid, the cam law used most; every other law is one ``--law`` away.
 COMPARED_LAWS = (*LAW_NAMES[:7], "modified_trapezoid")
 
 #: Every parameter name any law takes (``chi``), for readers of problem files.
-LAW_PARAMETERS = tuple(sorted({p for spec in _LAWS.values() for p in spec.params}))
+LAW_PARAMETERS = tuple(sorted({p for spec in _LAWS.values() if not spec.table for p in spec.params}))
 
 
 @dataclass(frozen=True)
@@ -233,6 +257,8 @@ class MotionLaw:
         self._ders = ca.Function(f"law_{name}_ders", [x], ders)
 
     def __repr__(self) -> str:
+        if self._spec.table:
+            return f"MotionLaw('points', {len(self.params['points_x'])} points)"
         p = ", ".join(f"{k}={v:g}" for k, v in self.params.items())
         return f"MotionLaw({self.name!r}{', ' + p if p else ''})"
 
@@ -244,6 +270,8 @@ class MotionLaw:
 
     @property
     def label(self) -> str:
+        if self._spec.table:
+            return f"points ({len(self.params['points_x'])} points, rest order {self.params['rest_order']:g})"
         p = ", ".join(f"{k} = {v:g}" for k, v in self.params.items())
         return f"{self.name} ({p})" if p else self.name
 
@@ -332,6 +360,9 @@ def make_law(name: str, *, where: tuple[str, str] = ("<law>", "law"), **params: 
     ``where`` is ``(file, field)`` for the error message.
     """
     file, fld = where
+    if name in _LAWS and _LAWS[name].table:
+        raise ProblemError(file, fld, f"law {name!r} is a move's own points: give it on a [[timing.intervals]] row "
+                                      "with angles_deg and positions_mm (or positions_deg)")
     if name not in _LAWS:
         raise ProblemError(file, fld, f"unknown motion law {name!r}; choose one of {', '.join(LAW_NAMES)}")
     spec = _LAWS[name]
@@ -387,3 +418,49 @@ def compared_laws(own: MotionLaw) -> list[MotionLaw]:
     """The laws a design is compared with, the problem's own law with its parameters among them."""
     laws = [own if name == own.name else make_law(name) for name in COMPARED_LAWS]
     return laws if own.name in COMPARED_LAWS else [*laws, own]
+
+
+#: The rest orders a points law may meet its dwells with: velocity (1), acceleration (2), jerk (3) zero at the ends.
+POINTS_REST_ORDERS = (1, 2, 3)
+
+
+def points_law(angles_deg, positions, span_deg: float, stroke: float, rest_order: int = 2, *,
+               where: tuple[str, str] = ("<law>", ""), positions_key: str = "positions") -> MotionLaw:
+    """The ``points`` law of a move of ``span_deg`` and ``stroke`` (both positive, in the file's unit): the
+    travelled ``positions`` (0 .. stroke from the move's start) at ``angles_deg`` (cam angle from the move's
+    start, strictly inside the move), joined by the B-spline of :func:`_points`. ``where``: (file, the row's
+    path) for the error messages, which name ``angles_deg`` or ``positions_key``."""
+    file, row = where
+    name = lambda key: f"{row}.{key}" if row else key  # noqa: E731
+    angles, pos = (_number_list(v, file, name(k)) for v, k in ((angles_deg, "angles_deg"), (positions, positions_key)))
+    if not angles:
+        raise ProblemError(file, name("angles_deg"), "needs at least one point inside the move")
+    if len(angles) != len(pos):
+        raise ProblemError(file, name(positions_key), f"{len(pos)} positions for {len(angles)} angles")
+    x, y = np.asarray(angles) / span_deg, np.asarray(pos) / stroke
+    if np.any(np.diff(x) <= 0) or x[0] <= 0 or x[-1] >= 1:
+        raise ProblemError(file, name("angles_deg"), f"must rise strictly inside the move (0 < angle < {span_deg:g} "
+                                                     "deg from its start)")
+    if np.any(y <= 0) or np.any(y >= 1) or np.any(np.diff(y) < 0):
+        raise ProblemError(file, name(positions_key), f"must rise from 0 to the stroke {stroke:g} (the travel from "
+                                                    "the move's start, strictly between its ends)")
+    if rest_order not in POINTS_REST_ORDERS:
+        raise ProblemError(file, name("rest_order"), f"must be one of {POINTS_REST_ORDERS}, got {rest_order!r}")
+    law = _cached_law("points", (("points_x", tuple(map(float, x))), ("points_y", tuple(map(float, y))),
+                                 ("rest_order", float(rest_order))))
+    grid = np.linspace(0.0, 1.0, 4001)
+    speed = law.derivatives(grid, 1)[1]
+    if np.min(speed) < -1e-9 * np.max(np.abs(speed)):
+        back = grid[int(np.argmin(speed))] * span_deg
+        raise ProblemError(file, name(positions_key), f"the spline through the points goes back near {back:.3g} deg "
+                                                    "into the move: add points there or lower rest_order")
+    return law
+
+
+def _number_list(value, file: str, field: str) -> list[float]:
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    if not isinstance(value, (list, tuple)) or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value):
+        raise ProblemError(file, field, f"must be a list of finite numbers, got {value!r}")
+    return [float(v) for v in value]
