@@ -251,3 +251,41 @@ def test_a_points_law_file_runs_through_the_commands(command, write_problem, cap
         assert data["candidates"][0]["motor"] == "055U2B30" and data["candidates"][0]["peak_torque_N_m"] > 0
     else:
         assert data["stroke"].startswith("modified_sine (chi = 0.095), points") and data["impact_velocity_m_s"] > 0
+
+
+def test_out_never_writes_over_the_design_or_another_file(reference_written, tmp_path, capsys):
+    design = reference_written.out / "design.json"
+    before = design.read_bytes()
+    assert main(["camtable", str(design), "--format", "xyva", "--out", str(design)]) == 2
+    assert "is the design file itself" in capsys.readouterr().err
+    other = tmp_path / "notes.csv"
+    other.write_text("my own numbers\n")
+    assert main(["camtable", str(design), "--format", "xyva", "--out", str(other)]) == 2
+    assert "not a cam table strokeopt wrote" in capsys.readouterr().err
+    assert design.read_bytes() == before and other.read_text() == "my own numbers\n"
+    table = tmp_path / "t.csv"  # a table strokeopt wrote is written over
+    assert main(["camtable", str(design), "--format", "xyva", "--out", str(table)]) == 0
+    assert main(["camtable", str(design), "--format", "poly5", "--out", str(table)]) == 0
+    assert "Polynomial5" in table.read_text()
+    assert main(["camtable", str(design), "--format", "xyva"]) == 2
+    assert "give --out FILE" in capsys.readouterr().err
+
+
+def test_check_file_judges_a_table_edited_by_hand(reference_written, tmp_path, capsys):
+    # one point of an xyva table moved by 0.05 deg of motor: about 10 um at the bar (24-tooth pulley, r 11.46 mm)
+    design = str(reference_written.out / "design.json")
+    table = tmp_path / "edited.csv"
+    assert main(["camtable", design, "--format", "xyva", "--out", str(table)]) == 0
+    capsys.readouterr()
+    lines = table.read_text().splitlines()
+    i = next(k for k, line in enumerate(lines) if line.startswith("30.000000,"))
+    master, slave, *rest = lines[i].split(",")
+    lines[i] = ",".join([master, repr(float(slave) + 0.05), *rest])
+    table.write_text("\n".join(lines) + "\n")
+    code = main(["camtable", design, "--format", "xyva", "--check-file", str(table), "--json"])
+    out, err = capsys.readouterr()
+    report = json.loads(out)
+    assert code == 1 and report["status"] == "check failed" and not report["written"]
+    assert report["check"]["position_motor_deg"] == pytest.approx(0.05, rel=0.01)
+    assert report["check"]["position_load_um"] == pytest.approx(np.radians(0.05) * 11.459e-3 * 1e6, rel=0.01)
+    assert "position 9.9" in err and "over the tolerance 1 um" in err

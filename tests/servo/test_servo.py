@@ -161,11 +161,11 @@ def test_residual_vibration_by_law(reference, setup):
     # laws whose acceleration jumps excite the belt mode more than laws with continuous acceleration
     problem, settings, _, _ = setup
     rows = {r["law"].split(" ")[0]: r for r in residual_vibration_table(problem, 600, settings=settings)}
-    assert set(rows) == {"parabolic", "cubic", "cosine", "modified_sine", "sine", "poly5", "poly7"}
+    assert set(rows) == {"parabolic", "cubic", "cosine", "modified_sine", "sine", "poly5", "poly7", "modified_trapezoid"}
     for r in rows.values():
         assert math.isfinite(r["handover_error_mm"]) and r["residual_vibration_mm"] >= 0
     jumps = [rows[k]["residual_vibration_mm"] for k in ("parabolic", "cubic", "cosine")]
-    smooth = [rows[k]["residual_vibration_mm"] for k in ("modified_sine", "sine", "poly5", "poly7")]
+    smooth = [rows[k]["residual_vibration_mm"] for k in ("modified_sine", "sine", "poly5", "poly7", "modified_trapezoid")]
     assert min(jumps) > max(smooth), (jumps, smooth)
 
 

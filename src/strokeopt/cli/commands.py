@@ -15,15 +15,9 @@ def cmd_laws(args) -> int:
     from ..report.format import format_table, to_json
 
     rows = law_table()
-    if args.plot and args.plot.lower() != "none":
-        from pathlib import Path
-
-        from ..motion.laws import LAW_NAMES, make_law
-        from ..report.motion import plot_laws
-
-        _write_figure(lambda p: plot_laws([make_law(n) for n in LAW_NAMES], p), Path(args.plot), args)
     if args.json:
         _emit(to_json({"status": "ok", "laws": rows}))
+        _laws_figure(args)
         return 0
     for r in rows:
         r["params"] = ", ".join(f"{k} = {v:g}" for k, v in r["params"].items()) or None
@@ -31,7 +25,18 @@ def cmd_laws(args) -> int:
                               ("C_j", "C_j"), ("continuity", "continuity"), ("first_jump", "first jump")],
                        title="Motion laws, unit rise (v = C_v h/T, a = C_a h/T^2, jerk = C_j h/T^3)"))
     print("\nC_j '-': the acceleration jumps (at the ends against a dwell, or inside), so the jerk is an impulse.")
+    _laws_figure(args)
     return 0
+
+
+def _laws_figure(args) -> None:
+    if args.plot and args.plot.lower() != "none":
+        from pathlib import Path
+
+        from ..motion.laws import LAW_NAMES, make_law
+        from ..report.motion import plot_laws
+
+        _write_figure(lambda p: plot_laws([make_law(n) for n in LAW_NAMES], p), Path(args.plot), args)
 
 
 def _linkage_file(args) -> bool:

@@ -172,6 +172,8 @@ def _load(args, fix_in_design: bool = False):
         params = {} if law_name and name != problem.default_law.name else dict(problem.default_law.params)
         params.update(given)
         if chi is not None:
+            if "chi" in given and given["chi"] != chi:
+                raise ProblemError("command line", "--chi", f"{chi:g}, but --law gives chi = {given['chi']:g}: give it once")
             params["chi"] = chi
         problem = problem.with_law(make_law(name, where=("command line", "--law/--chi"), **params))
     table = getattr(args, "stroke_table", None)
@@ -195,14 +197,17 @@ def _law_option(text: str) -> tuple[str, dict]:
     name, _, rest = text.partition(":")
     params = {}
     for item in filter(None, (part.strip() for part in rest.split(","))):
-        key, eq, value = item.partition("=")
+        key, eq, value = (part.strip() for part in item.partition("="))
         try:
-            params[key.strip()] = float(value)
+            number = float(value) if eq else None
         except ValueError:
+            number = None
+        if number is None:
             raise ProblemError("command line", "--law", f"{item!r} is not PARAM=NUMBER (as in "
-                                                        "--law s_curve:ramp_share=0.6)") from None
-        if not eq:
-            raise ProblemError("command line", "--law", f"{item!r} is not PARAM=NUMBER")
+                                                        "--law s_curve:ramp_share=0.6)")
+        if key in params:
+            raise ProblemError("command line", "--law", f"{key} is given twice")
+        params[key] = number
     return name.strip(), params
 
 

@@ -57,7 +57,9 @@ def _stroke_options(p: argparse.ArgumentParser, sweep: bool = False, law: bool =
     if law:
         p.add_argument("--law", metavar="NAME[:PARAM=VALUE,...]",
                        help="use this motion law for every move, with its parameters after a colon (see "
-                            "'strokeopt laws'; e.g. --law s_curve:ramp_share=0.6,constant_speed_share=0.2)")
+                            "'strokeopt laws'; e.g. --law s_curve:ramp_share=0.6,constant_speed_share=0.2); the "
+                            "file's parameters of the same law stay unless given, another law starts from its "
+                            "defaults")
         p.add_argument("--chi", type=float, help="shape parameter chi of the modified sine law (0.001 <= chi <= 0.25)")
 
 
@@ -311,18 +313,26 @@ def build_parser() -> argparse.ArgumentParser:
                                    "acceleration deviation from the verified stroke, and re-simulates the design "
                                    "with the interpolated stroke (the verified pipeline's verdict); exit code 1 when "
                                    "it fails.",
-                       epilog="Example: strokeopt solve problems/deco2000_needle_bar.toml --out out && strokeopt "
-                              "camtable out/design.json --format xyva --out out/cam_xyva.csv --check")
+                       epilog="Examples: strokeopt solve problems/deco2000_needle_bar.toml --out out && strokeopt "
+                              "camtable out/design.json --format xyva --out out/cam_xyva.csv --check; strokeopt "
+                              "camtable out/design.json --format xyva --check-file edited.csv")
     p.add_argument("file", metavar="DESIGN.json", help="a design file written by 'strokeopt solve --out DIR'")
     p.add_argument("--problem", help="problem file (default: the problem_file recorded in the design)")
     p.add_argument("--format", required=True, choices=list(FORMATS), help="the controller's table format")
-    p.add_argument("--out", dest="out_file", required=True, metavar="FILE", help="the table file to write")
-    p.add_argument("--points", type=int, metavar="N", help="points a cam cycle (a divisor of 36000; default: the "
-                                                           "fewest within --tolerance)")
+    p.add_argument("--out", dest="out_file", metavar="FILE",
+                   help="the table file to write (a file that exists is written over only if it is a table "
+                        "strokeopt wrote)")
+    p.add_argument("--check-file", metavar="FILE",
+                   help="check a table that exists (one edited by hand, or written before) instead of writing one: "
+                        "read as --format says, against the design's verified stroke")
+    p.add_argument("--points", type=int, metavar="N",
+                   help="segments a cam cycle, from 36 to 36000 and dividing 36000, so every point sits on a 0.01 deg "
+                        "master position (default: the fewest within --tolerance)")
     p.add_argument("--tolerance", type=float, metavar="MM",
                    help="largest position deviation of the interpolated table from the verified stroke, in mm of "
                         "the load (deg for a rotary load); default 0.001 (1 um)")
-    p.add_argument("--check", action="store_true", help="read the file back, measure its deviation and re-simulate")
+    p.add_argument("--check", action="store_true", help="read the file back, measure its deviation and re-simulate "
+                                                         "(always with --check-file)")
     p.add_argument("--json", action="store_true", help="print only JSON on stdout (for scripts)")
     p.set_defaults(run=cmd_camtable, overrides=[])
 

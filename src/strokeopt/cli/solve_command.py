@@ -163,6 +163,9 @@ def _solve_one(args, problem, cam_spec, progress) -> int:
         print(f"verdict: {verified.verdict}")
     if args.out is not None:
         _write_outputs(args, verified, summary, chosen, cam_spec)
+    elif getattr(design.settings, "cam_tables", ()):
+        print(f"note: design.cam_tables asks for {', '.join(design.settings.cam_tables)}: they are written with "
+              "--out DIR (beside design.json)", file=sys.stderr)
     # one figure: --plot FILE, else into --out DIR beside design.json, else strokeopt-out/
     fig_path = _plot_path(args, "solve", spm_tag(design.spm), design.objective)
     if fig_path is not None and args.plot is None and args.out is not None:

@@ -92,7 +92,7 @@ def compare_with_laws(design: Design, laws=None) -> list[dict]:
 
     problem = design.problem
     if laws is None:
-        laws = compared_laws(problem.default_law)
+        laws = compared_laws(problem.default_law, [m.law for m in problem.timing.moves])
     measure = objective_of(design.objective).compare_measure
     settings = design.settings or getattr(problem, "design", None) or DesignSettings()
     opt = {"law": "optimal", **_stroke_measures(design, design.stroke)}

@@ -364,7 +364,11 @@ def make_law(name: str, *, where: tuple[str, str] = ("<law>", "law"), **params: 
         raise ProblemError(file, fld, f"law {name!r} is a move's own points: give it on a [[timing.intervals]] row "
                                       "with angles_deg and positions_mm (or positions_deg)")
     if name not in _LAWS:
-        raise ProblemError(file, fld, f"unknown motion law {name!r}; choose one of {', '.join(LAW_NAMES)}")
+        import difflib
+
+        close = difflib.get_close_matches(str(name), LAW_NAMES, n=1, cutoff=0.75)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        raise ProblemError(file, fld, f"unknown motion law {name!r}{hint}; choose one of {', '.join(LAW_NAMES)}")
     spec = _LAWS[name]
     unknown = set(params) - set(spec.params)
     if unknown:
@@ -414,10 +418,15 @@ def law_table() -> list[dict]:
     return rows
 
 
-def compared_laws(own: MotionLaw) -> list[MotionLaw]:
-    """The laws a design is compared with, the problem's own law with its parameters among them."""
+def compared_laws(own: MotionLaw, others=()) -> list[MotionLaw]:
+    """The laws a design is compared with: :data:`COMPARED_LAWS`, the problem's own law with its parameters in
+    its place, then ``others`` (the laws of single moves) that are not among them. A move's own points are
+    not compared: they are that move's, not a law for every move."""
     laws = [own if name == own.name else make_law(name) for name in COMPARED_LAWS]
-    return laws if own.name in COMPARED_LAWS else [*laws, own]
+    for law in (own, *others):
+        if law not in laws and not _LAWS[law.name].table:
+            laws.append(law)
+    return laws
 
 
 #: The rest orders a points law may meet its dwells with: velocity (1), acceleration (2), jerk (3) zero at the ends.

@@ -135,7 +135,10 @@ def kinematics_text(summary: dict) -> str:
     laws = sorted({m["law"] for m in summary["moves"]})
     head += "\nmotion law: " + ", ".join(laws)
     rows = [{**r, "time_ms": r["time_s"] * 1e3} for r in summary["intervals"]]
-    return head + "\n\n" + format_table(rows, KINEMATICS_COLUMNS)
+    columns = KINEMATICS_COLUMNS
+    if len(laws) > 1:  # moves of different laws: each row says its own
+        columns = [*KINEMATICS_COLUMNS[:4], ("law", "law"), *KINEMATICS_COLUMNS[4:]]
+    return head + "\n\n" + format_table(rows, columns)
 
 
 def _member_text(summary: dict) -> str:
@@ -231,7 +234,7 @@ def plot_laws(laws, path: str | Path | None = None, n: int = 2001):
     normalised time, one line per law (a jerk impulse at a jump is left out, not drawn as a spike)."""
     x = np.linspace(0.0, 1.0, n)
     fig, axes = plt.subplots(4, 1, sharex=True, figsize=(9, 12), constrained_layout=True)
-    colours = plt.get_cmap("tab20").colors
+    colours = plt.get_cmap("tab10").colors  # ten hues, then the same hues dashed: no two lines alike
     for i, law in enumerate(laws):
         ders = law.derivatives(x, 3)
         style = {"color": colours[i % len(colours)], "ls": ("-", "--", ":")[i // len(colours) % 3], "lw": 1.1}

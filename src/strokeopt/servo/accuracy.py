@@ -271,7 +271,7 @@ def residual_vibration_table(problem, spm: float | None = None, strokes=(), *,
     gains = gains or tuned_gains(axis, settings)
     scale, u = error_unit(axis.rotary)
     cases = []
-    for law in compared_laws(problem.default_law):
+    for law in compared_laws(problem.default_law, [m.law for m in problem.timing.moves]):
         cases.append((law.label, lambda law=law: problem.with_law(law).stroke(spm)))
     cases += [(label, lambda st=st: st) for label, st in strokes]
     rows = []

@@ -74,7 +74,8 @@ def design_moves(problem, spm: float, settings: DesignSettings) -> list[Move]:
             if math.isinf(c_j):
                 raise ProblemError(str(problem.file), "design.jerk_max_from_law",
                                    f"the motion law {itv.law.label} of move {itv.move_index} has unbounded jerk; "
-                                   "give jerk_max_m_s3 instead")
+                                   "bound the jerk in m/s^3 instead (--set design.jerk_max_from_law=false --set "
+                                   "design.jerk_max_m_s3=VALUE), or leave it unbounded (jerk_max_from_law = false)")
             bound = c_j * abs(itv.stroke) / law_dur**3
         out.append(Move(itv.move_index, itv.index, itv.name, float(t0), float(dur), itv.start_position, itv.stroke,
                         bound, problem.timing.starts_at_speed(itv), itv.end_speed))
