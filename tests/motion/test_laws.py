@@ -289,3 +289,46 @@ def test_points_law_refuses_points_that_are_no_rise(angles, positions, field, wo
 def test_points_law_is_a_moves_own(reference_path):
     with pytest.raises(ProblemError, match="a move's own points"):
         make_law("points")
+
+
+# --------------------------------------------------------------------------- moves that start or end at a speed
+
+@pytest.mark.parametrize("start, end", [(0.0, 0.0), (0.0, 1.5), (0.75, 0.75), (1.125, 0.4), (1.0, 1.0)])
+def test_poly5_between_speeds_meets_its_boundary_values(start, end):
+    # VDI 2143's polynomial of degree 5 with boundary values: y(0) = 0, y(1) = 1, y' the given speeds, y'' = 0
+    law = make_law("poly5_speeds", start_speed=start, end_speed=end)
+    y, y1, y2 = law.derivatives([0.0, 1.0], order=2)
+    assert np.allclose(y, [0, 1], atol=1e-12) and np.allclose(y1, [start, end], atol=1e-12)
+    assert np.allclose(y2, 0, atol=1e-10)
+    x = np.linspace(0, 1, 301)
+    if start == end == 0.0:  # rest to rest: the 3-4-5 polynomial
+        assert np.allclose(law(x), make_law("poly5")(x), atol=1e-12)
+    if start == end == 1.0:  # at the mean speed at both ends: constant speed
+        assert np.allclose(law(x), x, atol=1e-12)
+
+
+def test_a_turn_that_closes_at_speed_runs_at_constant_speed():
+    # the hybrid loom's single move of a turn, joined to itself at speed: the classic stroke is the crank at its
+    # constant speed (200 picks/min: 2 pi x 200/60 rad/s), the linkage's own machine
+    from pathlib import Path
+
+    from strokeopt import load_problem
+
+    problem = load_problem(Path(__file__).resolve().parents[2] / "problems" / "loom_beatup_hybrid.toml")
+    stroke = problem.stroke()
+    k = stroke.evaluate(np.linspace(0, stroke.period, 1001))
+    assert np.allclose(k.v, 2 * math.pi * 200 / 60, rtol=1e-9) and np.allclose(k.a, 0, atol=1e-6)
+
+
+def test_moves_joined_at_speed_keep_speed_and_acceleration_across_the_joint():
+    from pathlib import Path
+
+    from strokeopt import load_problem
+
+    problem = load_problem(Path(__file__).resolve().parents[2] / "problems" / "known_optima" / "turning_spline.toml")
+    stroke = problem.stroke()
+    laws = problem.timing.move_laws(problem.spm)
+    assert {law.name for law in laws.values()} == {"poly5_speeds"}
+    for at in (stroke.pieces[1].t_start, 0.0):
+        before, after = stroke.evaluate([(at - 1e-9) % stroke.period, at + 1e-9]).v
+        assert before == pytest.approx(after, rel=1e-6) and after == pytest.approx(2 * math.pi, rel=1e-6)

@@ -83,6 +83,15 @@ def _modified_sine(x, chi):
     return ca.if_else(x < chi, rise(x), ca.if_else(x <= 1 - chi, middle, 1 - rise(1 - x)))
 
 
+def _poly5_speeds(x, start_speed, end_speed):
+    """VDI 2143's polynomial of degree 5 between given speeds: y(0) = 0, y(1) = 1, y'(0) = start_speed,
+    y'(1) = end_speed (unit speeds: 1 is the move's mean speed), y'' = 0 at both ends. Both speeds 0: the 3-4-5
+    polynomial (rest to rest); a move that starts or ends at a speed (rest to speed, speed to speed) is this."""
+    a, b = 1.0 - start_speed, end_speed - start_speed
+    a3, a4, a5 = np.linalg.solve([[1.0, 1.0, 1.0], [3.0, 4.0, 5.0], [6.0, 12.0, 20.0]], [a, b, 0.0])
+    return start_speed * x + a3 * x**3 + a4 * x**4 + a5 * x**5
+
+
 def _poly9(x):
     # 5-6-7-8-9 polynomial: v = a = jerk = snap = 0 at both ends
     return 126 * x**5 - 420 * x**6 + 540 * x**7 - 315 * x**8 + 70 * x**9
@@ -166,6 +175,10 @@ _LAWS: dict[str, _LawSpec] = {
     "poly5": _LawSpec("polynomial 3-4-5", _poly5),
     "poly7": _LawSpec("polynomial 4-5-6-7", _poly7),
     "poly9": _LawSpec("polynomial 5-6-7-8-9", _poly9),
+    "poly5_speeds": _LawSpec(
+        "polynomial of degree 5 between speeds (VDI 2143 rest-to-speed, speed-to-speed)", _poly5_speeds,
+        # unit speeds: 1 is the move's mean speed; 3 is a move that reaches three times it at an end
+        params={"start_speed": (0.0, -3.0, 3.0, False), "end_speed": (0.0, -3.0, 3.0, False)}, symmetric=False),
     "modified_trapezoid": _LawSpec(
         "modified trapezoid (cycloidal flanks, constant acceleration)", _scca,
         fixed={"sine_share": 0.25, "constant_accel_share": 0.5},

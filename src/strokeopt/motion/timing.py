@@ -140,13 +140,47 @@ class TimingDiagram:
         return replace(self, intervals=tuple(replace(i, law=law) if i.is_move else i for i in self.intervals))
 
     def stroke(self, spm: float) -> StrokeFunction:
-        """The stroke of the classic laws of this diagram at ``spm``."""
+        """The stroke of the classic laws of this diagram at ``spm``. A move that starts or ends at a speed (a joint
+        at speed) runs VDI 2143's polynomial of degree 5 between the joints' speeds (:meth:`move_laws`)."""
         sch = self.schedule(spm)
+        laws = self.move_laws(spm)
         pieces = []
         for itv, t0, dur in zip(self.intervals, sch.t_start, sch.duration):
             if itv.is_move:
-                pieces.append(law_piece(t0, dur, itv.start_position, itv.stroke, itv.law, f"{itv.name}: {itv.law.label}"))
+                law = laws[itv.index]
+                pieces.append(law_piece(t0, dur, itv.start_position, itv.stroke, law, f"{itv.name}: {law.label}"))
             else:
                 pieces.append(dwell_piece(t0, dur, itv.start_position, itv.name))
-        laws = {i.law.label for i in self.moves}
-        return StrokeFunction(sch.period, pieces, label=", ".join(sorted(laws)))
+        return StrokeFunction(sch.period, pieces, label=", ".join(sorted({law.label for law in laws.values()})))
+
+    def move_laws(self, spm: float) -> dict:
+        """The law each move runs (by interval index): its own, or where it starts or ends at a speed the
+        polynomial of degree 5 between the speeds of its joints. A joint's speed is the mean speed of the two
+        moves it joins, ``(h_a + h_b)/(T_a + T_b)`` (zero where they move apart), so a load that turns at a
+        constant speed keeps it, and a single move that closes the cycle at speed turns uniformly."""
+        from .laws import make_law
+
+        sch = self.schedule(spm)
+        items = list(zip(self.intervals, sch.duration))
+        out = {}
+        for k, (itv, dur) in enumerate(items):
+            if not itv.is_move:
+                continue
+            before, after = items[k - 1], items[(k + 1) % len(items)]
+            start = _joint_speed(before, (itv, dur)) if self.starts_at_speed(itv) else 0.0
+            end = _joint_speed((itv, dur), after) if itv.end_speed else 0.0
+            if start == 0.0 and end == 0.0:
+                out[itv.index] = itv.law
+                continue
+            unit = dur / itv.stroke  # a joint's speed in the move's unit speeds (1: its mean speed)
+            out[itv.index] = make_law("poly5_speeds", start_speed=round(start * unit, 12), end_speed=round(end * unit, 12))
+        return out
+
+
+def _joint_speed(a, b) -> float:
+    """The speed at the joint of moves ``a`` then ``b`` ((interval, duration) pairs): their mean speed, zero where
+    they move apart (a reversal is at rest)."""
+    (ia, ta), (ib, tb) = a, b
+    if ia.stroke * ib.stroke <= 0:
+        return 0.0
+    return (ia.stroke + ib.stroke) / (ta + tb)

@@ -23,6 +23,7 @@ def kinematics_summary(problem, stroke: StrokeFunction, spm: float, step_angle: 
         return _member_summary(problem, stroke, spm, step_angle)
     r = problem.transmission.radius
     sch = problem.timing.schedule(spm)
+    laws = problem.timing.move_laws(spm)
     peaks = stroke.piece_peaks()
     intervals, moves = [], []
     deg = 180.0 / math.pi
@@ -31,7 +32,7 @@ def kinematics_summary(problem, stroke: StrokeFunction, spm: float, step_angle: 
             "index": itv.index,
             "name": itv.name,
             "kind": "move" if itv.is_move else "dwell",
-            "law": itv.law.label if itv.is_move else None,
+            "law": laws[itv.index].label if itv.is_move else None,
             "stroke_mm": abs(itv.stroke) * 1e3,
             "direction": ("up" if itv.stroke > 0 else "down") if itv.is_move else None,
             "span_deg": 360.0 * dur / sch.period,  # the cam angle the interval takes at these times
@@ -90,11 +91,12 @@ def member_peaks(transmission, stroke: StrokeFunction, step_angle: float | None 
 
 def _member_summary(problem, stroke: StrokeFunction, spm: float, step_angle: float | None) -> dict:
     sch = problem.timing.schedule(spm)
+    laws = problem.timing.move_laws(spm)
     intervals, moves = [], []
     for itv, members, t0, dur in zip(problem.timing.intervals, member_peaks(problem.transmission, stroke, step_angle),
                                      sch.t_start, sch.duration):
         row = {"index": itv.index, "name": itv.name, "kind": "move" if itv.is_move else "dwell",
-               "law": itv.law.label if itv.is_move else None, "stroke_mm": abs(itv.stroke) * 1e3,
+               "law": laws[itv.index].label if itv.is_move else None, "stroke_mm": abs(itv.stroke) * 1e3,
                "direction": ("up" if itv.stroke > 0 else "down") if itv.is_move else None,
                "span_deg": 360.0 * dur / sch.period, "span_nominal_deg": itv.span_deg,
                "start_angle_deg": 360.0 * t0 / sch.period, "end_angle_deg": 360.0 * (t0 + dur) / sch.period,
