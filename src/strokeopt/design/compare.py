@@ -158,7 +158,7 @@ def _law_violations(problem, spm: float, settings: DesignSettings, law) -> list[
     c_j = c.C_j
     if settings.rest_order < 2 and math.isinf(c_j):
         # the design itself may jump in acceleration at the dwells (rest_order 1): only the jerk inside counts
-        from ..motion.laws import _peak
+        from ..motion.characteristics import _peak
 
         inner = law.derivatives([x + d for x in law.breaks for d in (-1e-9, 1e-9)] or [0.5], 2)[2]
         jumps = np.abs(inner[0::2] - inner[1::2]) if law.breaks else np.zeros(1)
