@@ -38,6 +38,9 @@ class Piece:
     position: ca.Function
     label: str = ""
     unbounded_jerk_inside: bool = False
+    #: optional numpy evaluation of ``[s, v, a, jerk]`` at local times (the same function as ``position``, faster
+    #: on many points than a CasADi expression with a branch per polynomial piece: :func:`polynomial_piece`)
+    numeric: object = field(default=None, repr=False, compare=False)
     _ders: ca.Function = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -54,6 +57,8 @@ class Piece:
 
     def derivatives(self, tau) -> list[np.ndarray]:
         """Numeric ``[s, v, a, jerk]`` at local times ``tau``."""
+        if self.numeric is not None:
+            return self.numeric(np.asarray(tau, dtype=float))
         return evaluate(self._ders, tau)
 
     def symbolic(self, tau):
@@ -67,6 +72,49 @@ def law_piece(t_start: float, duration: float, s_start: float, stroke: float, la
     expr = s_start + stroke * law(tau / duration)
     jump_inside = law.characteristics.continuity < 2 and bool(law.breaks)
     return Piece(t_start, duration, ca.Function("move", [tau], [expr]), label or law.label, jump_inside)
+
+
+def polynomial_piece(t_start: float, duration: float, breaks, coefficients, label: str = "") -> Piece:
+    """A piece made of polynomials of the local time: ``coefficients[k]`` (ascending) on ``[breaks[k],
+    breaks[k + 1])``, measured from ``breaks[k]`` (``breaks[0] = 0``). CasADi holds it as a branch per
+    polynomial; numpy evaluates it by locating each time's polynomial (``numeric``), the same numbers."""
+    breaks = np.asarray(breaks, dtype=float)
+    coefs = [np.asarray(c, dtype=float) for c in coefficients]
+    tau = ca.SX.sym("tau")
+
+    def horner(c, u):
+        acc = ca.SX(float(c[-1]))
+        for ck in c[-2::-1]:
+            acc = acc * u + float(ck)
+        return acc
+
+    expr = horner(coefs[-1], tau - breaks[-1])
+    for k in range(len(coefs) - 2, -1, -1):
+        expr = ca.if_else(tau < breaks[k + 1], horner(coefs[k], tau - breaks[k]), expr)
+    width = max(len(c) for c in coefs)
+    table = np.zeros((len(coefs), width))
+    for k, c in enumerate(coefs):
+        table[k, :len(c)] = c
+    ders = [table]
+    for _ in range(3):  # coefficients of v, a, jerk
+        prev = ders[-1]
+        ders.append(np.column_stack([prev[:, 1:] * np.arange(1, prev.shape[1]), np.zeros(len(prev))]))
+
+    def numeric(t):
+        shape = np.shape(t)
+        t = np.atleast_1d(t)
+        idx = np.clip(np.searchsorted(breaks, t, side="right") - 1, 0, len(coefs) - 1)
+        u = t - breaks[idx]
+        out = []
+        for c in ders:
+            rows = c[idx]
+            acc = rows[:, -1].copy()
+            for k in range(c.shape[1] - 2, -1, -1):
+                acc = acc * u + rows[:, k]
+            out.append(acc.reshape(shape))
+        return out
+
+    return Piece(t_start, duration, ca.Function("polynomials", [tau], [expr]), label, numeric=numeric)
 
 
 def dwell_piece(t_start: float, duration: float, position: float, label: str = "dwell") -> Piece:

@@ -34,7 +34,7 @@ import casadi as ca
 import numpy as np
 from numpy.polynomial import Polynomial
 
-from ...motion.stroke import Piece
+from ...motion.stroke import Piece, polynomial_piece
 
 SCHEMES = ("radau",)
 
@@ -265,19 +265,7 @@ def fine_grid(mesh: Mesh, per_interval: int = 20) -> np.ndarray:
 
 
 def move_piece(t_start: float, duration: float, start: float, stroke: float, sol: MoveSolution, label: str) -> Piece:
-    """A stroke piece reproducing the collocation polynomials of one move exactly (one branch per mesh interval)."""
-    tau = ca.SX.sym("tau")
+    """A stroke piece reproducing the collocation polynomials of one move exactly (one polynomial per mesh interval)."""
     h = sol.mesh.h * duration
-    coefs = sol.position_polynomials(duration, start, stroke)
-    breaks = np.arange(sol.mesh.intervals) * h
-
-    def horner(c, u):
-        acc = ca.SX(float(c[-1]))
-        for ck in c[-2::-1]:
-            acc = acc * u + float(ck)
-        return acc
-
-    expr = horner(coefs[-1], tau - breaks[-1])
-    for k in range(len(coefs) - 2, -1, -1):
-        expr = ca.if_else(tau < breaks[k + 1], horner(coefs[k], tau - breaks[k]), expr)
-    return Piece(t_start, duration, ca.Function("optimal_move", [tau], [expr]), label)
+    return polynomial_piece(t_start, duration, np.arange(sol.mesh.intervals) * h,
+                            sol.position_polynomials(duration, start, stroke), label)
