@@ -41,15 +41,20 @@ class Piece:
     #: optional numpy evaluation of ``[s, v, a, jerk]`` at local times (the same function as ``position``, faster
     #: on many points than a CasADi expression with a branch per polynomial piece: :func:`polynomial_piece`)
     numeric: object = field(default=None, repr=False, compare=False)
-    _ders: ca.Function = field(init=False, repr=False, compare=False)
+    _built: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
-    def __post_init__(self):
-        tau = ca.SX.sym("tau")
-        s = self.position(tau)
-        v = ca.jacobian(s, tau)
-        a = ca.jacobian(v, tau)
-        j = ca.jacobian(a, tau)
-        object.__setattr__(self, "_ders", ca.Function("piece_ders", [tau], [s, v, a, j]))
+    @property
+    def _ders(self) -> ca.Function:
+        """``tau -> [s, v, a, jerk]`` by CasADi's algorithmic differentiation, built on first use (a piece with a
+        ``numeric`` evaluation may never need it)."""
+        if "ders" not in self._built:
+            tau = ca.SX.sym("tau")
+            s = self.position(tau)
+            v = ca.jacobian(s, tau)
+            a = ca.jacobian(v, tau)
+            j = ca.jacobian(a, tau)
+            self._built["ders"] = ca.Function("piece_ders", [tau], [s, v, a, j])
+        return self._built["ders"]
 
     @property
     def t_end(self) -> float:
