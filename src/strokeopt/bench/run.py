@@ -8,7 +8,7 @@ from .registry import REGISTRY, BenchResult
 
 def _load_all() -> None:
     """Import the modules that register benchmarks outside this one."""
-    from . import contact, design, linkage, report, servo, sizing, solve_parts, studies  # noqa: F401  (each registers its benchmarks)
+    from . import contact, design, linkage, report, servo, sizing, solve_parts, stroke, studies  # noqa: F401  (each registers its benchmarks)
 
 
 def benchmark_names() -> list[tuple[str, str]]:
