@@ -77,3 +77,18 @@ def test_design_file_schema_is_checked(tmp_path, capsys, design_dir, edit, words
     assert main(["verify", str(tmp_path / "bad.json"), "--plot", "none"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "bad.json" in err[0] and words in err[0]
+
+
+@pytest.mark.parametrize("edit, field, words", [
+    (lambda d: {**d, "motor": "XYZ"}, "motor", "'XYZ' is not in the catalogue of"),
+    (lambda d: {**d, "problem_file": "/nonexistent/x.toml"}, "problem_file", "pass --problem FILE"),
+    (None, "", "is not JSON (expecting property name"),
+])
+def test_a_hand_edited_design_is_refused_naming_its_own_file(reference_written, tmp_path, capsys, edit, field, words):
+    # the design file is named, not the problem file it points to (a new user's edits: a motor, a moved problem)
+    data = json.loads((reference_written.out / "design.json").read_text())
+    path = tmp_path / "design.json"
+    path.write_text(json.dumps(edit(data)) if edit else "{not json")
+    assert main(["verify", str(path), "--plot", "none"]) == 2
+    err = capsys.readouterr().err
+    assert f"{path}: {field + ': ' if field else ''}" in err and words in err and "Traceback" not in err

@@ -185,6 +185,14 @@ def _load(args, fix_in_design: bool = False):
         from ..files.cam_formats import read_stroke
 
         args.design_stroke = read_stroke(table, problem)
+    data = getattr(args, "design_data", None)
+    if data is not None and data.get("motor") is not None and getattr(problem, "drive", None) is not None:
+        cat = problem.drive.catalogue()  # the design's motor (a servo or a stepper): named by its file
+        known = {**cat.motors, **cat.steppers}
+        if data["motor"] not in known:
+            raise ProblemError(str(args.design), "motor", f"{data['motor']!r} is not in the catalogue of "
+                                                          f"{args.problem} ({', '.join(known)}): the design file is "
+                                                          "damaged or of another problem")
     if getattr(args, "design_data", None) is not None:  # a design of another problem is refused here
         from ..files.design_file import check_design_fits
 

@@ -354,6 +354,10 @@ def read_design(path: str | Path) -> tuple[dict, StrokeFunction]:
         if path.suffix.lower() == ".toml":
             raise ProblemError(str(path), "", "is a problem file; a design file is the design.json that "
                                               "'strokeopt solve PROBLEM --out DIR' writes (DIR/design.json)") from None
+        if isinstance(exc, json.JSONDecodeError):
+            raise ProblemError(str(path), "", f"is not JSON ({exc.msg.lower()} at line {exc.lineno}, column "
+                                              f"{exc.colno}): a design file is the design.json 'strokeopt solve "
+                                              "PROBLEM --out DIR' writes") from None
         raise ProblemError(str(path), "", f"is not a readable design file: {exc}") from None
     if not isinstance(data, dict) or data.get("format") != "strokeopt-design":
         raise ProblemError(str(path), "format", "is not a strokeopt design file (format != 'strokeopt-design')")
@@ -466,4 +470,7 @@ def design_problem_file(path, data: dict, problem_file=None) -> Path:
     file = Path(problem_file)
     if not file.is_absolute() and not file.exists() and (Path(path).parent / file).exists():
         file = Path(path).parent / file
+    if not file.exists() and problem_file == data.get("problem_file"):
+        raise ProblemError(str(path), "problem_file", f"names {str(file)!r}, which does not exist here (a design "
+                                                      "moved from another machine?): pass --problem FILE")
     return file
