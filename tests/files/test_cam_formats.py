@@ -59,7 +59,8 @@ def test_the_load_deviation_is_the_motor_angle_over_the_pulley_radius(design):
     assert d.position_load == pytest.approx(np.radians(d.position_deg) * design.radius, rel=1e-3)
 
 
-@pytest.mark.parametrize("fmt", ["xyva", "poly5", "segments", "csv"])
+@pytest.mark.parametrize("fmt", ["xyva", *(pytest.param(f, marks=pytest.mark.slow)  # each re-simulates the design
+                                            for f in ("poly5", "segments", "csv"))])
 def test_camtable_check_of_the_reference_design(fmt, reference_written, tmp_path, capsys):
     # the acceptance: each format within 1 um at its default number of points, saying how many
     out = tmp_path / f"cam_{fmt}.csv"
@@ -97,7 +98,7 @@ def test_points_needed_is_the_fewest(design):
 
 def test_too_few_points_fail_the_check(reference_written, tmp_path, capsys):
     out = tmp_path / "coarse.csv"
-    code = main(["camtable", str(reference_written.out / "design.json"), "--format", "csv", "--points", "90",
+    code = main(["camtable", str(reference_written.out / "design.json"), "--format", "xyva", "--points", "36",
                  "--out", str(out), "--check"])
     text = capsys.readouterr()
     assert code == 1 and "NOT within 1 um" in text.out and "check failed" in text.err

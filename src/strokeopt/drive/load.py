@@ -61,6 +61,10 @@ class LoadForce:
     ``kind = "spring"``: a compression spring met at ``contact_position`` [m]:
     beyond it (against ``direction``) it pushes with ``force`` (its preload)
     plus ``stiffness`` times the penetration; before it, nothing.
+    ``kind = "friction"``: against the load's velocity ``v``, ``-(force sign + viscous v)`` (Coulomb ``force``
+    [N], ``viscous`` [N s/m]; :func:`friction_sign`: at rest, against the acceleration ``a`` that starts the
+    motion); on CasADi symbols smooth within ``smoothing`` [m/s] (the collocation's form), on numbers exact (the
+    design's fine-grid check judges the exact one).
     ``direction`` is +1 (pushes towards +x) or -1. ``spring``: the name of the contact model's spring
     (``[model.springs]``) ``force`` and ``stiffness`` were derived from, or None (given in ``[drive]``).
     """
@@ -72,12 +76,31 @@ class LoadForce:
     stiffness: float = 0.0
     contact_position: float = 0.0
     spring: str | None = None
+    viscous: float = 0.0
+    smoothing: float = 1e-3
 
-    def __call__(self, s):
+    def __call__(self, s, v=None, a=None):
         if self.kind == "constant":
             return self.direction * self.force + 0 * s
+        if self.kind == "friction":
+            if v is None:
+                raise ValueError(f"the friction {self.name!r} needs the load's velocity")
+            return -(self.force * friction_sign(v, a, self.smoothing) + self.viscous * v) + 0 * s
         penetration = self.direction * (self.contact_position - s)
         return _where(penetration > 0, self.direction * (self.force + self.stiffness * penetration), 0 * s)
+
+
+def friction_sign(v, a=None, smoothing: float = 1e-3):
+    """The direction a friction opposes: the velocity's, and at rest the acceleration's (the motion about to
+    start must overcome it). Numbers: exact; CasADi symbols: ``tanh(v/w + (1 - tanh(v/w)^2) a/(w/s))``, the
+    velocity's sign beyond ``w = smoothing`` and the acceleration's at rest."""
+    if _symbolic(v, a):
+        t = ca.tanh(v / smoothing)
+        return ca.tanh(v / smoothing + (1 - t**2) * (0 if a is None else a) / smoothing)
+    v = np.asarray(v, dtype=float)
+    if a is None:
+        return np.sign(v)
+    return np.where(v != 0, np.sign(v), np.sign(a))
 
 
 @dataclass(frozen=True)
@@ -100,6 +123,13 @@ class Load:
     gravity: float = 0.0
     forces: tuple[LoadForce, ...] = ()
     members: tuple[Member, ...] = ()
+    #: the transmission's efficiency (``[transmission] efficiency``, 0 to 1): the motor supplies what the load
+    #: takes over it while driving, and gets what the load gives times it while braking
+    efficiency: float = 1.0
+
+    @property
+    def has_friction(self) -> bool:
+        return any(f.kind == "friction" for f in self.forces)
 
 
 @dataclass(frozen=True)
@@ -122,6 +152,7 @@ class TorqueTerms:
     load_force: object
     total: object
     members: dict = None  # member name -> its torque (Load.members), empty for a load without members
+    efficiency: object = 0.0  # what the transmission's losses add (Load.efficiency; 0 for an ideal one)
 
     def as_dict(self) -> dict:
         """The torque terms by name, in the order they add up to ``total``."""
@@ -129,6 +160,8 @@ class TorqueTerms:
                "moving_mass": self.moving_mass, "gravity": self.gravity}
         out.update({f"member: {k}": v for k, v in (self.members or {}).items()})
         out.update({f"force: {k}": v for k, v in self.forces.items()})
+        if not (isinstance(self.efficiency, float) and self.efficiency == 0.0):
+            out["efficiency loss"] = self.efficiency
         return out
 
 
@@ -151,7 +184,7 @@ def load_torque(motor, transmission, load: Load, s, v, a) -> TorqueTerms:
     else:
         _, mu, _ = transmission.transfer(phi)
     m = load.moving_mass
-    forces = {f.name: f(s) for f in load.forces}
+    forces = {f.name: f(s, v, a) for f in load.forces}
     f_ext = sum(forces.values()) if forces else 0 * s
     rotor = rotor_inertia_of(motor) * eps
     own = transmission.own_terms(phi, omega, eps)  # its bodies' inertia; a linkage's gravity and loads by name
@@ -160,7 +193,8 @@ def load_torque(motor, transmission, load: Load, s, v, a) -> TorqueTerms:
     gravity = -m * load.gravity * mu
     force_torques = {k: -f * mu for k, f in forces.items()}
     load_force = m * (a - load.gravity) - f_ext
-    total = rotor + trans + load_force * mu
+    through = load_force * mu  # what goes through the transmission to the load
+    total = rotor + trans
     for name, torque in own.items():
         force_torques[name] = torque
         total = total + torque
@@ -170,8 +204,30 @@ def load_torque(motor, transmission, load: Load, s, v, a) -> TorqueTerms:
         for member in load.members:
             d1, d2 = stage[member.stage]
             members[member.name] = member.inertia * d1 * (d1 * eps + d2 * omega**2)
-            total = total + members[member.name]
-    return TorqueTerms(phi, omega, eps, rotor, trans, inertial, gravity, force_torques, load_force, total, members)
+            through = through + members[member.name]
+    loss = efficiency_loss(through, omega, load.efficiency)
+    total = total + through + loss
+    return TorqueTerms(phi, omega, eps, rotor, trans, inertial, gravity, force_torques, load_force, total, members,
+                       loss)
+
+
+#: The power over which the collocation's smooth efficiency turns from driving to braking [W]; the turn is centred
+#: at -3 times it, so a motor at rest under torque (starting or holding) counts as driving, as the exact rule does.
+EFFICIENCY_SMOOTHING_W = 0.01
+
+
+def efficiency_loss(through, omega, efficiency: float):
+    """What a transmission of ``efficiency`` adds to the torque ``through`` it at the motor speed ``omega``: the
+    motor supplies ``through / efficiency`` while it drives the load (power ``through * omega >= 0``) and gets
+    ``through * efficiency`` back while the load drives it. On CasADi symbols the switch is smooth
+    (``tanh(power / 0.01 W + 3)``), on numbers exact."""
+    if efficiency == 1.0:
+        return 0.0 * through
+    up, down = 1.0 / efficiency - 1.0, efficiency - 1.0
+    if _symbolic(through, omega):
+        driving = (1 + ca.tanh(through * omega / EFFICIENCY_SMOOTHING_W + 3.0)) / 2
+        return (down + (up - down) * driving) * through
+    return np.where(np.asarray(through) * np.asarray(omega) >= 0, up, down) * through
 
 
 def reflected_inertia(transmission, load: Load, phi=None) -> float:
@@ -184,3 +240,8 @@ def reflected_inertia(transmission, load: Load, phi=None) -> float:
         j = j + sum(m.inertia * np.asarray(stage[m.stage][0]) ** 2 for m in load.members)
     return float(np.max(j))
 
+
+def read_efficiency(fields) -> float:
+    """``[transmission] efficiency`` of a belt, gearbox or screw: 0.1 (a worm gear at its worst) to 1 (ideal, the
+    default), :func:`efficiency_loss`'s."""
+    return fields.number("efficiency", 1.0, min=0.1, max=1.0)

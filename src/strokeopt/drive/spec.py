@@ -9,7 +9,7 @@ the catalogue (catalogue.py) that sizing.py and the design search.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import replace, dataclass
 from pathlib import Path
 
 from ..errors import ProblemError
@@ -120,7 +120,11 @@ def parse_drive(f, base_dir: Path | None = None, model=None, reference=None, rot
     forces = []
     for row in f.tables("load_forces", required=False):
         name = row.string("name")
-        kind = row.string("kind", choices=("spring", "constant"))
+        kind = row.string("kind", choices=("spring", "constant", "friction"))
+        if kind == "friction":  # against the velocity: no direction of its own
+            forces.append(_friction(row, name, rotary))
+            row.finish()
+            continue
         direction = {"up": 1.0, "down": -1.0}[row.string("direction", choices=("up", "down"))]
         if rotary:
             forces.append(_rotary_load(row, name, kind, direction))
@@ -150,9 +154,25 @@ def parse_drive(f, base_dir: Path | None = None, model=None, reference=None, rot
     if len({x.name for x in members}) != len(members):
         raise f.error("members", "two members have the same name")
     f.finish()
-    return DriveSpec(motor, Load(mass, gravity, tuple(forces), tuple(members)), limits, profile, tmin, tmax, belt,
+    efficiency = getattr(transmission, "efficiency", 1.0)
+    return DriveSpec(motor, Load(mass, gravity, tuple(forces), tuple(members), efficiency), limits, profile, tmin, tmax, belt,
                      cord, service, allowable, tuple(resolved), f.file)
 
+
+
+def _friction(row, name: str, rotary: bool) -> LoadForce:
+    """Friction against the load's velocity: ``coulomb_N`` and ``viscous_N_s_m`` (a rotary load: ``coulomb_N_m``,
+    ``viscous_N_m_s_rad``), and the speed over which the collocation's smooth sign turns (``smoothing_m_s``,
+    ``smoothing_deg_s``); the checks after the solve use the exact sign."""
+    # forces as the other load forces' (to 100 kN); a viscous drag to 1e6 N s/m (a damper, not a guide);
+    # the smoothing from 1 um/s to 1 m/s (a move's speeds are 0.1 to 10 m/s)
+    if rotary:
+        return LoadForce(name, "friction", 1.0, row.number("coulomb_N_m", 0.0, min=0.0, max=1e5),
+                         viscous=row.number("viscous_N_m_s_rad", 0.0, min=0.0, max=1e6),
+                         smoothing=math.radians(row.number("smoothing_deg_s", 0.1, min=1e-4, max=100.0)))
+    return LoadForce(name, "friction", 1.0, row.number("coulomb_N", 0.0, min=0.0, max=1e5),
+                     viscous=row.number("viscous_N_s_m", 0.0, min=0.0, max=1e6),
+                     smoothing=row.number("smoothing_m_s", 1e-3, min=1e-6, max=1.0))
 
 
 def _rotary_load(row, name: str, kind: str, direction: float) -> LoadForce:
@@ -220,5 +240,5 @@ def with_model_springs(load: Load, stiffness: dict) -> Load:
             forces.append(f)
             continue
         length = f.force / f.stiffness if f.stiffness else 0.0
-        forces.append(LoadForce(f.name, f.kind, f.direction, k * length, k, f.contact_position, f.spring))
-    return Load(load.moving_mass, load.gravity, tuple(forces))
+        forces.append(replace(f, force=k * length, stiffness=k))
+    return replace(load, forces=tuple(forces))

@@ -22,6 +22,7 @@ import numpy as np
 
 from .._casadi import evaluate
 from ..errors import ProblemError
+from .load import read_efficiency
 
 
 class Transmission:
@@ -39,6 +40,7 @@ class Transmission:
     #: [timing] in deg)
     load_unit = "m"
     inertia = 0.0
+    efficiency = 1.0  # [transmission] efficiency (read_efficiency): the load model's losses through it
     #: whether the transmission's own bodies carry the load's masses (a linkage's links): the ``[drive]`` moving
     #: mass or inertia is then only what is added to its output, zero by default
     carries_load = False
@@ -246,8 +248,11 @@ class BeltPulley(Transmission):
         """``[transmission]`` of a belt drive: the toothed pulley's ``profile`` and ``pulley_teeth``."""
         profile = fields.string("profile", "GT3", choices=tuple(PROFILE_PITCH))
         teeth = fields.number("pulley_teeth", integer=True, min=TEETH_RANGE[0], max=TEETH_RANGE[1])
+        efficiency = read_efficiency(fields)
         fields.finish()
-        return cls.toothed(teeth, profile)
+        tr = cls.toothed(teeth, profile)
+        tr.efficiency = efficiency
+        return tr
 
     @classmethod
     def toothed(cls, teeth: int, profile: str = "GT3", inertia=0.0) -> "BeltPulley":
@@ -342,6 +347,7 @@ class ScrewLever(Transmission):
                                              f"{lam + rho:.1f} deg, at or above {SCREW_ANGLE_MAX_DEG:g} deg: no torque "
                                              "drives the nut (a shorter lead, a larger diameter or less friction)")
         check_reach(tr, trans, "sleeve_arm_mm", timing, "a longer arm or a shorter stroke")
+        tr.efficiency = read_efficiency(trans)
         trans.finish()
         return tr
 
@@ -437,8 +443,11 @@ class Gearbox(Transmission):
                     blame = "gearbox" if trans.where("gearbox") in trans.overridden else key  # what the user set
                     raise trans.error(blame, f"{name}: the catalogue's has {key} = {shown[1]:g}, the file {shown[0]:g}: "
                                              "a named gearbox supplies its values (omit them), or name none")
+        efficiency = read_efficiency(trans)
         trans.finish()
-        return cls(ratio, inertia, name)
+        tr = cls(ratio, inertia, name)
+        tr.efficiency = efficiency
+        return tr
 
     def __init__(self, ratio: float, inertia: float = 0.0, entry: str | None = None):
         if not (ratio > 0 and math.isfinite(ratio)):

@@ -165,10 +165,14 @@ def deviation(design, table: Segments) -> Deviation:
 def points_needed(design, fmt: str, tolerance_load: float) -> int | None:
     """The fewest points (of :data:`POINT_CHOICES`) whose table meets ``tolerance_load`` in the load's position
     [m or rad]; None when even the most does not."""
-    for n in POINT_CHOICES:
-        if deviation(design, design_segments(design, fmt, n)[0]).position_load <= tolerance_load:
-            return n
-    return None
+    meets = lambda n: deviation(design, design_segments(design, fmt, n)[0]).position_load <= tolerance_load  # noqa: E731
+    if not meets(POINT_CHOICES[-1]):
+        return None
+    lo, hi = -1, len(POINT_CHOICES) - 1  # the deviation falls as the points grow: bisect for the fewest that meet it
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        lo, hi = (lo, mid) if meets(POINT_CHOICES[mid]) else (mid, hi)
+    return POINT_CHOICES[hi]
 
 
 #: The position tolerance a table is written to by default: 0.001 of the load's unit (1 um, or 0.001 deg rotary).

@@ -303,12 +303,13 @@ def reference_signals(loop: ServoLoop, stroke, t: np.ndarray, *, forces: bool = 
     # acceleration: second difference centred on the nearest table point
     eps = (pos(kc + 1) - 2 * pos(kc) + pos(kc - 1)) / (tc * tc * r)
     # the external forces act where the bar is: on the commanded stroke as the loop follows it (delayed)
-    f_ext = axis.external_force(stroke.evaluate(t + shift - d).s) if forces else 0 * t
+    held = stroke.evaluate(t + shift - d) if forces else None
+    f_ext = axis.external_force(held.s, held.v) if forces else 0 * t
     tau_ff = 0 * t
     if s.acceleration_feedforward:
         tau_ff = tau_ff + axis.total_inertia * eps
     if s.load_feedforward if load_ff is None else load_ff:
-        tau_ff = tau_ff - r * axis.external_force(pos(kc))
+        tau_ff = tau_ff - r * axis.external_force(pos(kc), (pos(kc + 1) - pos(kc - 1)) / (2 * tc))
     return np.vstack([theta_ref, omega_ff, tau_ff, f_ext])
 
 

@@ -86,14 +86,18 @@ class DriveAxis:
                          [0, 0, 0, 1],
                          [k * r / m, c * r / m, -k / m, -c / m]])
 
-    def external_force(self, s) -> np.ndarray:
-        """Gravity plus the load forces on the bar [N], positive upward, along the positions ``s``."""
+    def external_force(self, s, v=None) -> np.ndarray:
+        """Gravity plus the load forces on the bar [N], positive upward, along the positions ``s`` (and the
+        velocities ``v``: a friction acts only where they are given -- the full simulation gives them, the
+        design's servo error term, a function of the position, leaves friction to it)."""
         s = np.asarray(s, dtype=float)
         if self.load is None:
             return np.zeros_like(s)
         out = self.load.moving_mass * self.load.gravity + 0 * s
         for force in self.load.forces:
-            out = out + np.asarray(force(s), dtype=float)
+            if force.kind == "friction" and v is None:
+                continue
+            out = out + np.asarray(force(s, v), dtype=float)
         return out
 
 

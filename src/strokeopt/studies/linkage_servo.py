@@ -155,7 +155,7 @@ def _static_torque(problem) -> float:
     stroke must reach (the move ends), at rest."""
     load = problem.drive.load
     ends = sorted({p for itv in problem.timing.intervals for p in (itv.start_position, itv.end_position)})
-    return max((abs(sum(float(f(np.array([x]))[0]) for f in load.forces)) for x in ends), default=0.0)
+    return max((abs(sum(float(f(np.array([x]), np.zeros(1))[0]) for f in load.forces)) for x in ends), default=0.0)
 
 
 def compare_linkage_servo(linkage_problem, servo_problem, gearboxes: list[GearboxEntry] | None = None,

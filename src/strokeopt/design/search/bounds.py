@@ -34,8 +34,8 @@ def torque_lower_bound(req, motor) -> tuple[float, int] | None:
     pulley of the search, and the move that sets it; None where no such bound is made (see the module)."""
     drive, settings = req.drive, req.settings
     if (drive is None or drive.own_transmission is not None or is_stepper(motor) or free_time(req.objective)
-            or settings.free or drive.load.members):
-        return None
+            or settings.free or drive.load.members or drive.load.has_friction or drive.load.efficiency != 1.0):
+        return None  # (friction and losses help braking: the rigid bound below would not hold)
     load = drive.load
     positions = [p for mv in req.moves for p in np.linspace(mv.start, mv.start + mv.stroke, 201)]
     s = np.asarray(positions)
