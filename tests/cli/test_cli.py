@@ -113,3 +113,15 @@ def test_an_option_in_the_wrong_place_gets_the_commands_usage(capsys, reference_
     err = capsys.readouterr().err
     assert exc.value.code == 2 and f"strokeopt {argv[0]}: error: unrecognized arguments" in err
     assert f"(see strokeopt {argv[0]} --help)" in err and len(err.strip().splitlines()) == 1  # one line, exit 2
+
+
+def test_laws_at_parameters_of_ones_own(capsys):
+    # the trapezoidal velocity with half the move at constant speed: C_v = 2/(1 + c) = 4/3, C_a = C_v/((1 - c)/2)
+    assert main(["laws", "--json", "--law", "trapezoidal_velocity:constant_speed_share=0.5",
+                 "--law", "modified_sine:chi=0.095"]) == 0
+    rows = json.loads(capsys.readouterr().out)["laws"]
+    assert [r["law"] for r in rows] == ["trapezoidal_velocity", "modified_sine"]
+    assert (rows[0]["C_v"], rows[0]["C_a"]) == pytest.approx((4 / 3, 16 / 3), rel=1e-9)
+    assert rows[1]["C_a"] == pytest.approx(5.373, abs=5e-4)  # thesis 4.4, chi = 0.095
+    assert main(["laws", "--law", "s_curve:ramp=1"]) == 2
+    assert "takes no parameter ramp" in capsys.readouterr().err

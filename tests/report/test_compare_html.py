@@ -98,3 +98,17 @@ def test_compare_needs_two_designs_and_says_which_file_is_bad(two_designs, capsy
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and str(bad) in err
     assert not (tmp_path / "c.html").exists()
+
+
+def test_a_design_compared_with_itself_is_said(two_designs, capsys, tmp_path):
+    # the same file twice, and a copy of it: their columns are identical, and compare says so before the work
+    import shutil
+
+    _, (peak, rms) = two_designs
+    copy = shutil.copy(peak, tmp_path / "copy.json")
+    assert main(["compare", str(peak), str(rms), str(copy), "--out", str(tmp_path / "c.html"), "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["identical"] == [[str(peak), str(copy)]]
+    assert f"note: {copy} is the same design as {peak}" in err
+    assert main(["compare", str(peak), str(rms), "--out", str(tmp_path / "d.html"), "--json"]) == 0
+    assert "identical" not in json.loads(capsys.readouterr().out)

@@ -14,10 +14,17 @@ def cmd_laws(args) -> int:
     from ..motion.laws import law_table
     from ..report.format import format_table, to_json
 
-    rows = law_table()
+    laws = None
+    if args.law:  # --law NAME:PARAM=VALUE (repeatable): those laws at those parameters
+        from ..motion.laws import make_law
+        from .common import _law_option
+
+        laws = [make_law(name, where=("command line", "--law"), **params)
+                for name, params in map(_law_option, args.law)]
+    rows = law_table(laws)
     if args.json:
         _emit(to_json({"status": "ok", "laws": rows}))
-        _laws_figure(args)
+        _laws_figure(args, laws)
         return 0
     for r in rows:
         r["params"] = ", ".join(f"{k} = {v:g}" for k, v in r["params"].items()) or None
@@ -25,18 +32,19 @@ def cmd_laws(args) -> int:
                               ("C_j", "C_j"), ("continuity", "continuity"), ("first_jump", "first jump")],
                        title="Motion laws, unit rise (v = C_v h/T, a = C_a h/T^2, jerk = C_j h/T^3)"))
     print("\nC_j '-': the acceleration jumps (at the ends against a dwell, or inside), so the jerk is an impulse.")
-    _laws_figure(args)
+    _laws_figure(args, laws)
     return 0
 
 
-def _laws_figure(args) -> None:
+def _laws_figure(args, laws=None) -> None:
     if args.plot and args.plot.lower() != "none":
         from pathlib import Path
 
         from ..motion.laws import LAW_NAMES, make_law
         from ..report.motion import plot_laws
 
-        _write_figure(lambda p: plot_laws([make_law(n) for n in LAW_NAMES], p), Path(args.plot), args)
+        laws = laws or [make_law(n) for n in LAW_NAMES]
+        _write_figure(lambda p: plot_laws(laws, p), Path(args.plot), args)
 
 
 def _linkage_file(args) -> bool:

@@ -146,9 +146,13 @@ def build_parser() -> argparse.ArgumentParser:
                                    "characteristic values C_v, C_a, C_j (computed from the laws, not typed in). A "
                                    "problem file names a law with law = NAME and its parameters beside it; a "
                                    "command takes --law NAME:PARAM=VALUE,...",
-                       epilog="Examples: strokeopt laws --json; strokeopt laws --plot laws.png")
+                       epilog="Examples: strokeopt laws --json; strokeopt laws --plot laws.png; strokeopt laws --law "
+                              "trapezoidal_velocity:constant_speed_share=0.5 --law modified_sine:chi=0.095")
     p.add_argument("--json", action="store_true", help="print only JSON on stdout")
     p.add_argument("--plot", metavar="FILE", help="a figure of every law's position, velocity, acceleration and jerk")
+    p.add_argument("--law", action="append", metavar="NAME[:PARAM=VALUE,...]",
+                   help="only this law, at these parameters (repeatable), e.g. --law s_curve:ramp_share=0.3 --law "
+                        "modified_sine:chi=0.095")
     p.set_defaults(run=cmd_laws)
 
     p = sub.add_parser("kinematics", parents=[problem], help="peak speed, acceleration and jerk of each interval",

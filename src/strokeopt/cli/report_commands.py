@@ -124,6 +124,9 @@ def cmd_compare(args) -> int:
     if len(args.designs) < 2:
         raise ProblemError("DESIGN.json", "", "compare needs two or more design files")
     loaded = [_design_file(path) for path in args.designs]  # every file read and checked before any simulation
+    same = _same_designs(args.designs)
+    for first, again in same:  # a design given twice is compared with itself: say so, once, before the work
+        print(f"note: {again} is the same design as {first}: their columns will be identical", file=sys.stderr)
     t0 = time.perf_counter()
     datas = []
     from ..studies.verified import verify_design
@@ -134,9 +137,26 @@ def cmd_compare(args) -> int:
                             f"read from {path}"))
     info = write_compare(datas, out)
     info.update(status="ok", build_time_s=time.perf_counter() - t0, designs=list(args.designs))
+    if same:
+        info["identical"] = [[str(a), str(b)] for a, b in same]
     if args.json:
         _emit(to_json(info))
     else:
         print(f"written {out} ({info['size_bytes'] / 1024:.0f} KB, {len(datas)} designs, built in "
               f"{info['build_time_s']:.2f} s)")
     return 0
+
+
+def _same_designs(paths) -> list[tuple[str, str]]:
+    """Pairs of the design files given that hold the same design (the same file twice, or a copy of it)."""
+    seen, same = {}, []
+    for path in paths:
+        try:
+            key = Path(path).read_bytes()
+        except OSError:
+            continue
+        if key in seen:
+            same.append((seen[key], path))
+        else:
+            seen[key] = path
+    return same

@@ -333,11 +333,12 @@ def _cached_law(name: str, params: tuple) -> MotionLaw:
     return MotionLaw(name, **dict(params))
 
 
-def law_table() -> list[dict]:
-    """The classic laws with their characteristic values (default parameters)."""
+def law_table(laws=None) -> list[dict]:
+    """The laws with their characteristic values: ``laws`` (MotionLaw objects), by default every law at its
+    default parameters."""
     rows = []
-    for name in LAW_NAMES:
-        law = make_law(name)
+    for law in laws if laws is not None else [make_law(name) for name in LAW_NAMES]:
+        name = law.name
         c = law.characteristics
         rows.append(
             {
