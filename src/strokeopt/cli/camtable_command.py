@@ -4,6 +4,7 @@ points is the stroke that was verified."""
 
 from __future__ import annotations
 
+import math
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -24,8 +25,6 @@ def _design(args):
 
 def _tolerance(args, rotary: bool) -> float:
     """The position tolerance in the load's SI unit (m, or rad for a rotary load)."""
-    import math
-
     from ..files.cam_formats import DEFAULT_TOLERANCE
 
     value = DEFAULT_TOLERANCE if args.tolerance is None else args.tolerance
@@ -66,9 +65,12 @@ def _is_cam_table(path: Path) -> bool:
 
 
 def cmd_camtable(args) -> int:
+    from ..design.compare import stroke_drive_checks
+    from ..design.transcription.limits import ENFORCED_CHECKS
     from ..files import cam_formats as cf
     from ..files.design_file import CamTableSpec, cam_table_header
     from ..io.plain import to_json
+    from ..studies.verified import verify_design
 
     if args.points is not None and args.points not in cf.POINT_CHOICES:
         raise ProblemError("--points", "", f"{args.points} is not one of the table sizes "
@@ -77,7 +79,7 @@ def cmd_camtable(args) -> int:
     path, write = _target(args)
     design = _design(args)
     rotary = design.problem.timing.rotary
-    unit, scale = ("mdeg", 180e3 / 3.141592653589793) if rotary else ("um", 1e6)
+    unit, scale = ("mdeg", math.degrees(1.0) * 1e3) if rotary else ("um", 1e6)
     tol = _tolerance(args, rotary)
     needed = cf.points_needed(design, args.format, tol)
     if write:
@@ -105,12 +107,7 @@ def cmd_camtable(args) -> int:
                            "velocity_motor_rpm": dev.velocity_rpm, "acceleration_motor_rad_s2": dev.acceleration_rad_s2,
                            "acceleration_share_of_peak": dev.acceleration_share,
                            "within_tolerance": bool(dev.position_load <= tol)}
-        from ..studies.verified import verify_design
-
         stroke = cf.segment_stroke(design, table, f"{args.format} cam table, {n} points")
-        from ..design.compare import stroke_drive_checks
-        from ..design.transcription.limits import ENFORCED_CHECKS
-
         # a linear table has no acceleration between its points: its torques would be the load's without inertia
         rigid = (stroke_drive_checks(design, stroke) or []) if interpolation != "linear" else []
         report["drive_checks"] = [{"name": c.name, "value": c.value, "design_value": design.check_value(c.name),
