@@ -169,7 +169,10 @@ def test_accuracy_with_an_optimal_design(capsys, reference, reference_path, tmp_
     assert data["spm"] == 600 and len(data["laws"]) == 9  # the 8 compared laws and the optimum
     optimal = data["laws"][-1]
     assert optimal["law"].startswith("optimal") and 0 < optimal["handover_error_mm"] < 0.5
-    assert optimal["residual_vibration_mm"] >= 0
+    # the optimum holds its acceleration continuous at the dwells: it rings the belt less than every law whose
+    # acceleration jumps there (test_servo.py: those excite the belt mode most)
+    jumps = [r["residual_vibration_mm"] for r in data["laws"] if r["law"].split(" ")[0] in ("parabolic", "cubic", "cosine")]
+    assert len(jumps) == 3 and optimal["residual_vibration_mm"] < min(jumps)
     # a design solved at another rate is refused, naming the file
     assert main(["accuracy", str(reference_path), "--design", str(path), "--spm", "500", "--plot", "none"]) == 2
     assert str(path) in capsys.readouterr().err

@@ -332,3 +332,23 @@ def test_moves_joined_at_speed_keep_speed_and_acceleration_across_the_joint():
     for at in (stroke.pieces[1].t_start, 0.0):
         before, after = stroke.evaluate([(at - 1e-9) % stroke.period, at + 1e-9]).v
         assert before == pytest.approx(after, rel=1e-6) and after == pytest.approx(2 * math.pi, rel=1e-6)
+
+
+def test_a_short_move_joined_at_speed_to_a_long_one_has_a_stroke(tmp_path):
+    # 10 deg in 90 deg of cam, then 350 deg in 270, one turn a cycle: the joints at 1 deg per cam deg are 9 times
+    # the short move's mean speed -- a classic stroke all the same, continuous in speed across the joints
+    from pathlib import Path
+
+    from strokeopt import load_problem
+
+    text = (Path(__file__).resolve().parents[2] / "problems" / "known_optima" / "turning_spline.toml").read_text()
+    text = text.replace("stroke_deg = 120", "stroke_deg = 10").replace("stroke_deg = 240", "stroke_deg = 350")
+    path = tmp_path / "short.toml"
+    path.write_text(text)
+    problem = load_problem(path)
+    laws = problem.timing.move_laws(problem.spm)
+    assert laws[1].params == {"end_speed": 9.0, "start_speed": 9.0}
+    stroke = problem.stroke()
+    at = stroke.pieces[1].t_start
+    before, after = stroke.evaluate([at - 1e-9, at + 1e-9]).v
+    assert before == pytest.approx(after, rel=1e-6) == pytest.approx(2 * math.pi, rel=1e-6)

@@ -193,7 +193,7 @@ def _load(args, fix_in_design: bool = False):
             raise ProblemError(str(args.design), "motor", f"{data['motor']!r} is not in the catalogue of "
                                                           f"{args.problem} ({', '.join(known)}): the design file is "
                                                           "damaged or of another problem")
-    if getattr(args, "design_data", None) is not None:  # a design of another problem is refused here
+    if data is not None:  # a design of another problem is refused here
         from ..files.design_file import check_design_fits
 
         check_design_fits(args.design_data, problem, str(args.design))

@@ -9,7 +9,7 @@ the catalogue (catalogue.py) that sizing.py and the design search.
 from __future__ import annotations
 
 import math
-from dataclasses import replace, dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..errors import ProblemError

@@ -175,8 +175,10 @@ _LAWS: dict[str, _LawSpec] = {
     "poly9": _LawSpec("polynomial 5-6-7-8-9", _poly9),
     "poly5_speeds": _LawSpec(
         "polynomial of degree 5 between speeds (VDI 2143 rest-to-speed, speed-to-speed)", _poly5_speeds,
-        # unit speeds: 1 is the move's mean speed; 3 is a move that reaches three times it at an end
-        params={"start_speed": (0.0, -3.0, 3.0, False), "end_speed": (0.0, -3.0, 3.0, False)}, symmetric=False),
+        # unit speeds: 1 is the move's mean speed; a short move joined at speed to a long fast one meets many
+        # times its own (10 deg in 90 joined at 1 deg/deg: 9); beyond 100 the move is no longer a move of its own
+        params={"start_speed": (0.0, -100.0, 100.0, False), "end_speed": (0.0, -100.0, 100.0, False)},
+        symmetric=False),
     "modified_trapezoid": _LawSpec(
         "modified trapezoid (cycloidal flanks, constant acceleration)", _scca,
         fixed={"sine_share": 0.25, "constant_accel_share": 0.5},
