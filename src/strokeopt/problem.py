@@ -102,7 +102,7 @@ class Problem:
 
 
 def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), path: Path | None = None) -> Problem:
-    top = Fields(data, file, "", overridden)
+    top = Fields(_implied(data), file, "", overridden)
 
     meta = top.table("problem")
     name = meta.string("name")
@@ -149,6 +149,9 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
     check_free(design.free if design is not None else (), model, drive, file)
     servo_table = top.table("servo", required=False)
     servo = parse_servo(servo_table, timing, spm, transmission) if servo_table is not None else None
+    if top.has("synthesis") and (top.raw("synthesis") is None or transmission.name != "linkage"):
+        raise top.error("synthesis", "states the targets `strokeopt linkage --synthesize` fits a linkage to: a "
+                                     "[transmission] type = \"linkage\" has them")
     top.finish()
     return Problem(
         file=path or Path(file),
@@ -167,6 +170,19 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
         servo=servo,
         error_terms=(ServoErrorTerm(),) if servo is not None else (),
     )
+
+
+def _implied(data: dict) -> dict:
+    """``data`` with the tables its transmission means where the file states no ``[timing]``
+    (``Transmission.implied``: a linkage's crank turning at constant speed) under the file's own."""
+    table = data.get("transmission")
+    cls = TRANSMISSIONS.get(table.get("type")) if isinstance(table, dict) else None
+    if "timing" in data or cls is None or cls.implied is None:
+        return data
+    out = dict(data)
+    for key, tables in cls.implied.items():
+        out[key] = {**copy.deepcopy(tables), **out.get(key, {})}
+    return out
 
 
 def _read_law(f: Fields, key: str, default: MotionLaw | None = None) -> MotionLaw:

@@ -1,6 +1,8 @@
-"""``strokeopt kinematics`` and ``strokeopt size`` on a linkage problem file (issue 24 item 3): the numbers are the
-linkage package's (summary.summarize, dynamics.analyse_dynamics, sizing.size_crank), --json parses, options that
-do not apply to a linkage are refused with exit 2, a failed limit is exit 1."""
+"""``strokeopt kinematics`` and ``strokeopt size`` on a linkage problem file without [timing]: read as a problem
+whose crank turns at constant speed, through the general commands; the transmission's own analysis (its outputs,
+transmission index, crank torque) is the linkage package's (summary.summarize, dynamics.analyse_dynamics), the
+motor and gearbox are `size`'s general choice, options that do not apply are refused with exit 2, a failed limit
+is exit 1."""
 
 from __future__ import annotations
 
@@ -11,9 +13,9 @@ import pytest
 
 from strokeopt.cli.main import main
 from strokeopt.linkage.dynamics import analyse_dynamics
+from strokeopt.files.problem_file import load_problem
 from strokeopt.linkage.files import load_linkage_file
 from strokeopt.linkage.kinematics import kinematics_of
-from strokeopt.linkage.sizing import size_crank
 from strokeopt.linkage.summary import summarize
 
 from conftest import ROOT
@@ -30,9 +32,15 @@ def _json(capsys, argv, code=0) -> dict:
 def test_kinematics_of_a_linkage_is_the_library_s(capsys, tmp_path):
     # before: "machine.spm: is required but missing"
     fig = tmp_path / "k.png"
-    out = _json(capsys, ["kinematics", str(LOOM), "--json", "--plot", str(fig)])
+    top = _json(capsys, ["kinematics", str(LOOM), "--json", "--plot", str(fig)])
     lib = summarize(load_linkage_file(LOOM), with_dynamics=False)
-    assert out["status"] == "ok" and out["command"] == "kinematics" and "dynamics" not in out
+    out = top["transmission_analysis"]
+    assert top["status"] == out["status"] == "ok" and "dynamics" not in out
+    # the crank turns once a pick at the constant 200 rpm: the general summary's turn
+    (turn,) = top["intervals"]
+    assert (turn["name"], turn["stroke_deg"], turn["time_s"]) == ("turn", 360.0, pytest.approx(0.3))
+    crank = next(m for m in turn["members"] if m["member"] == "crank")
+    assert crank["v_max"] == pytest.approx(200 * 2 * np.pi / 60) and crank["a_max"] == pytest.approx(0, abs=1e-9)
     assert fig.stat().st_size > 10_000
     sley = next(o for o in out["outputs"] if o["name"] == "sley_angle")
     assert sley == next(o for o in lib["outputs"] if o["name"] == "sley_angle")
@@ -60,8 +68,9 @@ def test_kinematics_below_the_transmission_limit_is_exit_1(capsys):
 
 def test_size_of_a_linkage_is_the_library_s(capsys, tmp_path):
     fig = tmp_path / "s.png"
-    out = _json(capsys, ["size", str(LOOM), "--json", "--explain", "--plot", str(fig)])
-    assert out["status"] == "ok" and fig.stat().st_size > 10_000
+    top = _json(capsys, ["size", str(LOOM), "--json", "--explain", "--plot", str(fig)])
+    out = top["transmission_analysis"]
+    assert top["status"] == "ok" and fig.stat().st_size > 10_000
     problem = load_linkage_file(LOOM)
     kin = kinematics_of(problem.linkage)
     dyn = analyse_dynamics(kin, kin.solve(problem.angles), problem.omega)
@@ -77,37 +86,44 @@ def test_size_of_a_linkage_is_the_library_s(capsys, tmp_path):
         assert row["torque_newton_euler_N_m"] == pytest.approx(row["torque_N_m"], abs=1e-6 * 19.31)
     beat = out["process_loads"][0]
     assert (beat["name"], beat["from_deg"], beat["to_deg"], beat["force_end_N"]) == ("beat-up", 352.0, 360.0, 1961.3)
-    # the motor and gearbox: the servo sley's catalogues (the file's [drive]) and its choice rule
-    lib = size_crank(dyn, problem.drive)
-    chosen = out["sizing"]["chosen"]
-    assert chosen == lib.chosen.row(explain=True)
-    assert (chosen["motor"], chosen["gearbox"], chosen["ratio"]) == ("AC-servo-100-8", "planetary-160-i10", 10.0)
-    assert chosen["peak_torque_N_m"] == pytest.approx(-t["min"] / 10) and chosen["motor_speed_rpm"] == 2000.0
-    assert all(c["ok"] for c in chosen["checks"])
-    fits = [c for c in out["sizing"]["candidates"] if c["feasible"]]
-    assert min(c["rated_torque_N_m"] for c in fits) == chosen["rated_torque_N_m"] == 8.0
+    # the motor and gearbox: every catalogue motor through every gearbox of the file's [drive] gearboxes, ranked as
+    # the file's [drive] choose says (the smallest motor that carries the crank, then the least RMS torque)
+    fits = [c for c in top["candidates"] if c["feasible"]]
+    first = top["candidates"][0]
+    assert first == fits[0] and len(top["candidates"]) == 11 * 5   # 11 motors, 5 gearboxes
+    # the sizing samples the cycle at 3601 points, the analysis at the file's 720 poses
+    assert first["peak_torque_N_m"] == pytest.approx(-t["min"] / first["ratio"], rel=1e-4)
+    assert first["peak_speed_rpm"] == pytest.approx(200.0 * first["ratio"])
+    rated = {m.name: m.rated_torque for m in load_problem(LOOM).drive.catalogue().motors.values()}
+    assert rated[first["motor"]] == min(rated[c["motor"]] for c in fits)
+    assert all(c["ok"] for c in first["checks"]) and {"gearbox_peak_output_torque", "gearbox_rated_output_torque"} <= \
+        {c["name"] for c in first["checks"]}
+    # the gearbox's output torque is the crank's: 19.31 N m at the beat-up, whatever the ratio
+    out_peak = next(c for c in first["checks"] if c["name"] == "gearbox_peak_output_torque")
+    assert out_peak["value"] == pytest.approx(-t["min"], rel=1e-4)
 
 
 def test_size_of_a_linkage_without_masses_says_so(capsys):
-    # the blind-stitch file states no masses: no torque to size for, and the report says what is left
-    out = _json(capsys, ["size", str(BLIND), "--json"])
+    # the blind-stitch file states no masses: no torque to size for, and the analysis says what is left
+    problem = load_problem(BLIND)
+    out = problem.transmission.analysis(problem, with_dynamics=True)
     assert "no masses" in out["note"] and out["dynamics"]["torque_N_m"]["rms"] == 0.0
-    assert _json(capsys, ["size", str(LOOM), "--json"])["note"] is None
+    assert main(["size", str(BLIND), "--plot", "none"]) == 2   # nor a [drive] to size
+    assert "drive: the problem has no [drive] section" in capsys.readouterr().err
+    assert _json(capsys, ["size", str(LOOM), "--json"])["transmission_analysis"]["note"] is None
 
 
 def test_size_text_and_an_infeasible_rate(capsys):
     assert main(["size", str(LOOM), "--plot", "none"]) == 0
     text = capsys.readouterr().out
-    assert "Newton-Euler" in text and "chosen: AC-servo-100-8 with planetary-160-i10" in text
+    assert "Newton-Euler" in text and "through every gearbox of" in text and "smallest motor" in text
     # at 2000 rpm the crank's inertia torque is 100 times larger: no pair carries it
     out = _json(capsys, ["size", str(LOOM), "--spm", "2000", "--json"], code=1)
-    assert out["status"] == "infeasible" and out["sizing"]["chosen"] is None
+    assert out["status"] == "infeasible" and not any(c["feasible"] for c in out["candidates"])
 
 
 @pytest.mark.parametrize("argv, option", [
     (["kinematics", str(LOOM), "--law", "poly5"], "--law"),
-    (["kinematics", str(LOOM), "--motor", "AC-servo-100-8"], "--motor"),
-    (["size", str(LOOM), "--max-spm"], "--max-spm"),
     (["size", str(LOOM), "--pulley-teeth", "24"], "--pulley-teeth"),
     (["size", str(LOOM), "--motor", "nope"], "--motor"),
 ])

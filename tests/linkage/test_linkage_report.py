@@ -74,9 +74,10 @@ def test_linkage_report_sections_and_numbers(capsys, tmp_path):
             assert float(value) == expected, key
         else:
             assert value == str(expected), key
-    assert tags.values["size.dynamics.torque_N_m.min"] == repr(sources["size"]["dynamics"]["torque_N_m"]["min"])
+    torque = sources["size"]["transmission_analysis"]["dynamics"]["torque_N_m"]["min"]
+    assert tags.values["size.transmission_analysis.dynamics.torque_N_m.min"] == repr(torque)
     text = out.read_text()
-    assert "AC-servo-100-8 with planetary-160-i10" in text and "flywheel" in text
+    assert sources["size"]["verdict"] in text and "flywheel" in text
 
 
 def test_the_report_s_options(capsys, tmp_path):
@@ -94,17 +95,23 @@ def test_the_servo_comparison_renders(tmp_path):
     from strokeopt.linkage.dynamics import analyse_dynamics
     from strokeopt.linkage.files import load_linkage_file
     from strokeopt.linkage.kinematics import kinematics_of
-    from strokeopt.linkage.summary import size_summary, summarize
+    from strokeopt.cli.main import build_parser
+    from strokeopt.cli.commands import size_report
+    from strokeopt.cli.common import apply_drive_options
     from strokeopt.report.linkage_report import LinkageReportData, linkage_report
     from strokeopt.studies.linkage_servo import compare_linkage_servo, load_gearboxes
 
     problem = load_linkage_file(LOOM)
+    loom = load_problem(LOOM)
+    args = build_parser().parse_args(["size", str(LOOM)])
+    apply_drive_options(args)
+    _, size = size_report(args, loom, loom.drive.catalogue())
     servo = compare_linkage_servo(problem, load_problem(ROOT / "problems" / "loom_beatup_servo.toml"),
                                   [g for g in load_gearboxes() if g.name == "planetary-160-i16"],
                                   motors=["AC-servo-100-8", "AC-servo-140-20"])
     kin = kinematics_of(problem.linkage)
     cycle = kin.solve(problem.angles)
-    data = LinkageReportData(summarize(problem, with_dynamics=False), size_summary(problem), kin, cycle,
+    data = LinkageReportData(loom.transmission.analysis(loom), size, kin, cycle,
                              analyse_dynamics(kin, cycle, problem.omega), servo, "loom_beatup_servo.toml")
     out = tmp_path / "servo.html"
     out.write_text(linkage_report(data), encoding="utf-8")

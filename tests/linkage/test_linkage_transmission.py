@@ -118,7 +118,7 @@ def test_the_servo_problem_is_read_by_the_one_reader():
     ("transmission.crank_range_deg=[-79.34, 104.4]", "transmission.crank_range_deg", "within -74.3382..99.3754 deg"),
     ("transmission.angles=36", "transmission.angles", "more samples a turn (angles) resolve it"),
     ("transmission.crank_range_deg=[-74.3]", "transmission.crank_range_deg", "must be [from, to]"),
-    ("transmission.near_dwell_pct=5", "transmission.near_dwell_pct", "unknown"),
+    ("transmission.near_dwell_pct=0", "transmission.near_dwell_pct", "plausible range [0.1, 50]"),
     ("transmission.min_transmission_index=0.9", "transmission.min_transmission_index", "falls to"),
     ("transmission.ratio=0", "transmission.ratio", ""),
 ])
@@ -128,10 +128,18 @@ def test_bad_linkage_transmission_fields_are_refused_by_name(setting, field, wor
     assert err.value.field == field and words in err.value.message
 
 
-def test_a_linkage_file_without_timing_says_what_it_is_for(capsys):
+def test_a_linkage_file_without_timing_is_its_crank_at_constant_speed(capsys):
+    # the one problem reader: one turn a cycle at [machine] spm, in crank coordinates, the classic stroke uniform
+    problem = load_problem(LOOM)
+    assert problem.transmission.name == "linkage" and problem.transmission.coordinates == "crank"
+    assert problem.spm == 200 and problem.cycle.noun == "pick" and problem.drive.gearbox_file.endswith("gearboxes.toml")
+    k = problem.stroke().sample(721)
+    assert np.ptp(k.v) < 1e-9 * k.v.max() and k.v.max() == pytest.approx(200 * 2 * math.pi / 60)
+    assert k.s[360] - k.s[0] == pytest.approx(math.pi)   # half a turn in half the cycle
+    # a command that designs names what the file lacks, in one line
     assert main(["solve", str(BLIND)]) == 2
-    err = capsys.readouterr().err
-    assert "without a [timing]" in err and "blind_stitch_servo.toml" in err
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "design.objective" in err[0] and "[drive]" in err[0]
 
 
 def test_size_on_the_servo_linkage(capsys):

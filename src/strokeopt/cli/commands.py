@@ -47,17 +47,7 @@ def _laws_figure(args, laws=None) -> None:
         _write_figure(lambda p: plot_laws(laws, p), Path(args.plot), args)
 
 
-def _linkage_file(args) -> bool:
-    from ..linkage.files import is_linkage_file
-
-    return is_linkage_file(args.problem)
-
-
 def cmd_kinematics(args) -> int:
-    if _linkage_file(args):  # a crank-driven linkage: its outputs over the crank angle (cli/linkage_command.py)
-        from .linkage_command import cmd_linkage_kinematics
-
-        return cmd_linkage_kinematics(args)
     from ..report.motion import plot_kinematics
     from ..report.motion import kinematics_summary, kinematics_text
     from ..io.load_units import to_load_units
@@ -71,23 +61,32 @@ def cmd_kinematics(args) -> int:
             if row.get("law") is not None:
                 row["law"] = stroke.label
     summary = {"status": "ok", **summary, "drive": drive_used(args, problem)}
+    from ..report.linkage import analysis_failure, linkage_text, plot_analysis
+
+    own = problem.transmission.analysis(problem)   # a linkage's outputs over the crank angle, its transmission index
+    if own is not None:
+        summary.update(status=own["status"], transmission_analysis=own)
     if args.json:  # a rotary load's keys and positions in deg (io/load_units.py), as design.json's
         _emit(to_json(to_load_units(summary, problem.timing.rotary)))
     else:
         print(kinematics_text(summary))
         print(drive_text(summary["drive"]))
-    _write_figure(lambda p: plot_kinematics(problem, stroke, problem.spm, p),
-                  _plot_path(args, "kinematics", spm_tag(problem.spm), stroke.label), args)
-    return 0
+        if own is not None:
+            print("\n" + linkage_text(own))
+    path = _plot_path(args, "kinematics", spm_tag(problem.spm), stroke.label)
+    if own is not None:
+        _write_figure(lambda p: plot_analysis(problem, own, p), path, args)
+    else:
+        _write_figure(lambda p: plot_kinematics(problem, stroke, problem.spm, p), path, args)
+    failure = None if own is None else analysis_failure(own)
+    if failure:
+        print(f"strokeopt: {failure}", file=sys.stderr)
+    return 1 if failure else 0
 
 
 def cmd_size(args) -> int:
-    if _linkage_file(args):  # a motor and gearbox on a linkage's crank (cli/linkage_command.py)
-        from .linkage_command import cmd_linkage_size
-
-        return cmd_linkage_size(args)
-    from ..drive.sizing import optimal_radius, size_drive
-    from ..report.drive import plot_sizing, sizing_text, sizing_verdict
+    from ..drive.sizing import optimal_radius
+    from ..report.drive import plot_sizing, sizing_text
     from ..report.format import to_json
 
     problem = _load(args)
@@ -97,19 +96,9 @@ def cmd_size(args) -> int:
         raise ProblemError("--continuous-radius", "", f"needs a belt pulley; the problem's transmission is a "
                                                       f"{problem.transmission.name}")
     catalogue = problem.drive.catalogue(args.catalogue)
-    progress = progress_bar(args, "max spm", "pair", when=args.max_spm)
-    sizing = size_drive(problem, catalogue=catalogue, motors=args.motor, teeth=args.pulley_teeth,
-                        find_max_spm=args.max_spm, progress=progress, stroke=args.design_stroke)
-    feasible = any(c.feasible for c in sizing.candidates)
-    report = {"status": "ok" if feasible else "infeasible", **sizing.to_dict(explain=args.explain),
-              "cycle": problem.cycle.noun,  # the machine's cycle: stitch, pick (io/cycle.py)
-              "drive": {"motors": args.motor or "every catalogue motor",
-                        "pulley_teeth": args.pulley_teeth or "the problem's pulley_teeth_min..max",
-                        "from": args.drive_from}}
-    if not hasattr(problem.transmission, "radius"):  # no pulley to choose: the problem's transmission
-        report["drive"]["pulley_teeth"] = None
-        report["drive"]["transmission"] = problem.transmission.name
-    report["verdict"] = sizing_verdict(sizing)
+    sizing, report = size_report(args, problem, catalogue)
+    own = report.get("transmission_analysis")
+    feasible = report["status"] == "ok"
     if args.continuous_radius:
         spec = problem.drive
         model = lambda d: catalogue.pulley_inertia(spec.profile, d)  # noqa: E731
@@ -119,6 +108,10 @@ def cmd_size(args) -> int:
     if args.json:
         _emit(to_json(report))
     else:
+        if own is not None and own.get("dynamics") is not None:
+            from ..report.linkage import dynamics_text
+
+            print(dynamics_text(own) + "\n")
         print(sizing_text(sizing, report, explain=args.explain))
     best = sizing.candidates[0]  # the figure's pair
     _write_figure(lambda p: plot_sizing(sizing, None, p),
@@ -128,6 +121,33 @@ def cmd_size(args) -> int:
         print(f"strokeopt: {report['verdict']}", file=sys.stderr)
         return 1
     return 0
+
+
+def size_report(args, problem, catalogue):
+    """The sizing of ``size`` (every catalogue motor with every pulley or gearbox the problem allows) and its JSON
+    report, with the transmission's own analysis where it has one (a linkage's crank torque, Newton-Euler's)."""
+    from ..drive.sizing import size_drive
+    from ..report.drive import sizing_verdict
+
+    progress = progress_bar(args, "max spm", "pair", when=getattr(args, "max_spm", False))
+    sizing = size_drive(problem, catalogue=catalogue, motors=args.motor, teeth=getattr(args, "pulley_teeth", None),
+                        find_max_spm=getattr(args, "max_spm", False), progress=progress, stroke=args.design_stroke)
+    feasible = any(c.feasible for c in sizing.candidates)
+    explain = getattr(args, "explain", False)
+    report = {"status": "ok" if feasible else "infeasible", **sizing.to_dict(explain=explain),
+              "cycle": problem.cycle.noun,  # the machine's cycle: stitch, pick (io/cycle.py)
+              "drive": {"motors": args.motor or "every catalogue motor",
+                        "pulley_teeth": getattr(args, "pulley_teeth", None) or "the problem's pulley_teeth_min..max",
+                        "from": args.drive_from}}
+    if not hasattr(problem.transmission, "radius"):  # no pulley to choose: the problem's transmission
+        report["drive"]["pulley_teeth"] = None
+        report["drive"]["transmission"] = problem.transmission.name
+        report["drive"]["gearboxes"] = problem.drive.gearbox_file   # chosen from this catalogue (None: the ratio)
+    report["verdict"] = sizing_verdict(sizing)
+    own = problem.transmission.analysis(problem, with_dynamics=True)   # a linkage's crank torque, Newton-Euler
+    if own is not None:
+        report["transmission_analysis"] = own
+    return sizing, report
 
 
 def cmd_bench(args) -> int:

@@ -167,6 +167,13 @@ def _load(args, fix_in_design: bool = False):
         raise
     law_name = getattr(args, "law", None)
     chi = getattr(args, "chi", None)
+    timing = problem.timing
+    if (law_name is not None or chi is not None) and not any(
+            itv.is_move and not (timing.starts_at_speed(itv) or itv.end_speed) for itv in timing.intervals):
+        raise ProblemError("--law" if law_name is not None else "--chi", "",
+                           f"every move of {args.problem} starts or ends at speed and follows the polynomial of degree "
+                           "5 between the speeds of its joints (a crank turning at constant speed: the linkage "
+                           "without [timing]); no move runs a law to set")
     if law_name is not None or chi is not None:
         name, given = _law_option(law_name) if law_name else (problem.default_law.name, {})
         params = {} if law_name and name != problem.default_law.name else dict(problem.default_law.params)

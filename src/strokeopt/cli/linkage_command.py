@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import sys
+import time
 
 from .common import _emit, _plot_path, _write_figure
 
@@ -60,7 +61,7 @@ def cmd_linkage(args) -> int:
 
         print(linkage_text(summary))
     _figure(args, problem, summary, "linkage")
-    return _transmission_exit(summary)
+    return _analysis_exit(summary)
 
 
 def _figure(args, problem, summary, command: str, linkage=None, tags=()) -> None:
@@ -76,6 +77,15 @@ def _figure(args, problem, summary, command: str, linkage=None, tags=()) -> None
         t0 = math.degrees(lk.crank.reference_angle)
         targets = ([(a - t0) % 360 for a in syn["angles_deg"]], syn["speeds_m_s"])
     _write_figure(lambda p: plot_linkage(kin, cycle, summary, p, targets), _plot_path(args, command, *tags), args)
+
+
+def _analysis_exit(summary: dict) -> int:
+    from ..report.linkage import analysis_failure
+
+    failure = analysis_failure(summary)
+    if failure:
+        print(f"strokeopt: {failure}", file=sys.stderr)
+    return 1 if failure else 0
 
 
 def _synthesize(args) -> int:
@@ -117,121 +127,35 @@ def _synthesize(args) -> int:
     return 0
 
 
-#: Options of ``kinematics`` and ``size`` that have no meaning for a linkage: its motion is its geometry (no law),
-#: its drive a motor and gearbox on the crank (no pulley, no design file).
-NOT_FOR_A_LINKAGE = {"law": "--law", "chi": "--chi", "design": "--design", "pulley_teeth": "--pulley-teeth",
-                     "max_spm": "--max-spm", "continuous_radius": "--continuous-radius"}
-
-
-def _linkage_problem(args, command: str):
-    """The linkage problem of ``kinematics`` or ``size``: the options that do not apply refused naming them,
-    ``--spm`` as the crank's rpm (one crank turn per machine cycle)."""
-    from ..errors import ProblemError
-    from ..linkage.files import load_linkage_file
-
-    if getattr(args, "servo", None) and command != "report":
-        raise ProblemError("--servo", "", "--servo is for the report of a linkage problem file")
-    for attr, option in NOT_FOR_A_LINKAGE.items():
-        if getattr(args, attr, None) not in (None, False, []):
-            raise ProblemError(option, "", f"{args.problem} is a linkage problem file: its motion is its geometry "
-                                           f"and its drive a motor and gearbox on the crank; {option} does not apply "
-                                           f"to 'strokeopt {command}' of a linkage (omit it)")
-    if command == "kinematics" and getattr(args, "motor", None):  # size and report: the motors tried
-        raise ProblemError("--motor", "", f"{args.problem} is a linkage problem file: 'strokeopt kinematics' of a "
-                                          "linkage has no motor ('strokeopt size' chooses one for the crank)")
-    overrides = list(args.overrides)
-    if getattr(args, "spm", None) is not None:
-        from .common import _spm_value
-
-        overrides.append(f"machine.rpm={_spm_value(args.spm)!r}")   # one crank turn per machine cycle
-    return load_linkage_file(args.problem, overrides)
-
-
-def cmd_linkage_kinematics(args) -> int:
-    """``strokeopt kinematics LINKAGE.toml``: every output over the crank angle at the file's rpm (position,
-    speed, acceleration, jerk), swing, near-dwells, rise/fall asymmetry, the least transmission index."""
-    from ..linkage.summary import summarize
-    from ..report.format import to_json
-    from ..report.linkage import linkage_text
-
-    problem = _linkage_problem(args, "kinematics")
-    summary = {**summarize(problem, with_dynamics=False), "command": "kinematics"}
-    if args.json:
-        _emit(to_json(summary))
-    else:
-        print(linkage_text(summary))
-    _figure(args, problem, summary, "kinematics", tags=(f"{problem.rpm:g}rpm",))
-    return _transmission_exit(summary)
-
-
-def cmd_linkage_size(args) -> int:
-    """``strokeopt size LINKAGE.toml``: the crank torque over the cycle (reduced inertia, gravity, process loads;
-    power balance checked by Newton-Euler) and a servo motor and gearbox on the crank."""
-    from ..linkage.summary import size_summary
-    from ..report.format import to_json
-    from ..report.linkage import linkage_size_text
-
-    problem = _linkage_problem(args, "size")
-    summary = size_summary(problem, args.motor or None, args.catalogue, args.explain)
-    if args.json:
-        _emit(to_json(summary))
-    else:
-        print(linkage_size_text(summary, explain=args.explain))
-    chosen = summary["sizing"]["chosen"]
-    tags = (f"{problem.rpm:g}rpm", chosen["motor"] if chosen else "none")
-    _write_figure(lambda p: _size_figure(problem, summary, p), _plot_path(args, "size", *tags), args)
-    if summary["status"] != "ok":
-        print(f"strokeopt: infeasible: no motor and gearbox of the catalogue carries the crank at {problem.rpm:g} rpm "
-              "(the candidates' 'binding' column names the limit)", file=sys.stderr)
-        return 1
-    return 0
-
-
-def _size_figure(problem, summary: dict, path) -> None:
-    from ..linkage.dynamics import analyse_dynamics
-    from ..linkage.kinematics import kinematics_of
-    from ..report.linkage import plot_linkage_size
-
-    kin = kinematics_of(problem.linkage)
-    cycle = kin.solve(problem.angles)
-    plot_linkage_size(kin, cycle, analyse_dynamics(kin, cycle, problem.omega), summary, path)
-
-
-def _transmission_exit(summary: dict) -> int:
-    if summary["status"] == "ok":
-        return 0
-    bad = next(t for t in summary["transmission"] if not t["ok"])
-    print(f"strokeopt: the transmission index of {', '.join(bad['links'])} falls to {bad['min_index']:.3g} at "
-          f"{bad['at_deg']:g} deg, below the limit {bad['limit']:g}", file=sys.stderr)
-    return 1
-
-
-def cmd_linkage_report(args, out) -> int:
-    """``strokeopt report LINKAGE.toml --out FILE.html [--servo SERVO.toml]``: the linkage's structure,
-    kinematics, transmission quality, crank torque and drive (and the servo comparison) as one HTML page."""
-    import time
+def stated_report(args, problem, out) -> int:
+    """``strokeopt report`` of a problem that states its motion and nothing to design (no ``[design]``) where its
+    transmission has an analysis of its own (a linkage's crank at constant speed): the linkage's structure,
+    kinematics, transmission quality, crank torque and the drive ``size`` chooses (and, ``--servo SERVO.toml``,
+    the linkage against a servo driving its output) as one HTML page."""
     from datetime import datetime, timezone
 
     from ..errors import ProblemError
     from ..linkage.dynamics import analyse_dynamics
     from ..linkage.kinematics import kinematics_of
-    from ..linkage.summary import size_summary, summarize
     from ..report.design_report import versions
     from ..report.format import to_json
     from ..report.linkage_report import LinkageReportData, linkage_report
+    from .commands import size_report
 
-    for attr, option in (("objective", "--objective"), ("scene", "--scene")):
+    for attr, option in (("objective", "--objective"), ("scene", "--scene"), ("design", "--design")):
         if getattr(args, attr, None):
-            raise ProblemError(option, "", f"{args.problem} is a linkage problem file: {option} does not apply to "
-                                           "its report (omit it)")
+            raise ProblemError(option, "", f"{args.problem} states its motion and no [design]: {option} does not "
+                                           "apply to its report (omit it)")
     t0 = time.perf_counter()
-    problem = _linkage_problem(args, "report")
-    servo = _servo_comparison(args, problem)   # the bad input of --servo before the page is drawn
-    kin = kinematics_of(problem.linkage)
-    cycle = kin.solve(problem.angles)
-    motors = [args.motor] if getattr(args, "motor", None) else None
-    data = LinkageReportData(summarize(problem, with_dynamics=False), size_summary(problem, motors), kin, cycle,
-                             analyse_dynamics(kin, cycle, problem.omega), servo, args.servo or "",
+    linkage = problem.transmission.at_constant_speed(problem)
+    servo = _servo_comparison(args, linkage)   # the bad input of --servo before the page is drawn
+    kin = kinematics_of(linkage.linkage)
+    cycle = kin.solve(linkage.angles)
+    if problem.drive is None:
+        raise ProblemError(args.problem, "drive", "the report sizes a motor for the crank: the problem has no [drive]")
+    _, size = size_report(args, problem, problem.drive.catalogue(getattr(args, "catalogue", None) or ()))
+    data = LinkageReportData(problem.transmission.analysis(problem), size, kin, cycle,
+                             analyse_dynamics(kin, cycle, linkage.omega), servo, args.servo or "",
                              list(args.overrides), versions(), datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC"))
     text = linkage_report(data)
     out.write_text(text, encoding="utf-8")
@@ -245,11 +169,11 @@ def cmd_linkage_report(args, out) -> int:
     return 0
 
 
-def _servo_comparison(args, problem):
+def _servo_comparison(args, linkage):
     """``--servo SERVO.toml``: the linkage against its output on a servo (studies/linkage_servo.py), or None."""
     if not getattr(args, "servo", None):
         return None
     from ..files.problem_file import load_problem
     from ..studies.linkage_servo import compare_linkage_servo
 
-    return compare_linkage_servo(problem, load_problem(args.servo))
+    return compare_linkage_servo(linkage, load_problem(args.servo))

@@ -58,25 +58,35 @@ def design_of(args, problem, scenes=None):
     return verified, summary, f"read from {args.design}"
 
 
+def _states_design(path) -> bool:
+    """Whether the problem file states a ``[design]`` (``--motor`` then fixes the solve's choice); a file that
+    cannot be read: True (the problem reader says why)."""
+    from ..files.problem_file import read_problem_data
+
+    try:
+        return "design" in read_problem_data(Path(path))
+    except ProblemError:
+        return True
+
+
 def cmd_report(args) -> int:
     from ..report.design_report import gather, write_report
     from ..report.format import to_json
 
     out = _html_path(args.html)
-    from ..linkage.files import is_linkage_file
+    problem = _load(args, fix_in_design=_states_design(args.problem))
+    if problem.design is None and problem.transmission.analysis(problem) is not None:
+        # nothing to design, a transmission with an analysis of its own (a linkage's crank at constant speed)
+        from .linkage_command import stated_report
 
-    if is_linkage_file(args.problem):  # a crank-driven linkage: its own page (report/linkage_report.py)
-        from .linkage_command import cmd_linkage_report
-
-        return cmd_linkage_report(args, out)
+        return stated_report(args, problem, out)
     if getattr(args, "servo", None):
-        raise ProblemError("--servo", "", f"{args.problem} is no linkage problem file: --servo sets a linkage "
-                                          "against a servo (e.g. problems/loom_beatup_sixbar.toml --servo "
-                                          "problems/loom_beatup_servo.toml)")
+        raise ProblemError("--servo", "", f"{args.problem} states a design: --servo sets a linkage whose crank turns "
+                                          "at constant speed against a servo (e.g. problems/loom_beatup_sixbar.toml "
+                                          "--servo problems/loom_beatup_servo.toml)")
     if args.design is not None and args.objective is not None:  # it would be ignored: say so instead
         raise ProblemError("--objective", "", f"a design read from --design {args.design} was solved for its own "
                                               "objective; --objective is for a report that solves (omit one of them)")
-    problem = _load(args, fix_in_design=True)
     scenes = _scenes(args, problem)
     args.sim_options = _sim_options(args)
     t0 = time.perf_counter()  # the solve (or the design file) judged: servo simulation, scenes; then the page

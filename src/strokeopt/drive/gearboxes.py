@@ -2,7 +2,7 @@
 it carries, its inertia on the motor shaft), and the one rule that picks a motor and gearbox among the pairs
 that carry a cycle: the smallest motor (least rated torque), then the least RMS torque. Used by the servo
 sley against the loom's linkage (studies/linkage_servo.py) and by the sizing of a servo on a linkage's crank
-(linkage/sizing.py)."""
+(drive/sizing.py, a linkage through [drive] gearboxes)."""
 
 from __future__ import annotations
 

@@ -64,6 +64,8 @@ class Candidate:
             return out
         out = {
             "motor": self.motor.name,
+            **({"gearbox": self.pulley.name, "ratio": self.pulley.entry.ratio}
+               if isinstance(self.pulley, GearboxChoice) else {}),
             "pulley_teeth": self.pulley.teeth,
             # None: the transmission is no belt pulley (a servo motor on a screw lever)
             "pulley_pitch_diameter_mm": None if self.pulley.pitch_diameter is None else self.pulley.pitch_diameter * 1e3,
@@ -116,6 +118,62 @@ class FixedTransmission:
 
     def transmission(self):
         return self.tr
+
+
+@dataclass(frozen=True)
+class GearboxChoice:
+    """The problem's transmission through one gearbox of the catalogue (``[drive] gearboxes``): a "pulley" a
+    sizing tries, with the gearbox's own checks (its output torques)."""
+
+    tr: object
+    entry: object  # gearboxes.GearboxEntry
+    teeth = None
+    pitch_diameter = None
+
+    @property
+    def name(self) -> str:
+        return self.entry.name
+
+    def transmission(self):
+        return self.tr
+
+    def checks(self, base) -> list[Check]:
+        """The gearbox's output torque over the cycle (the motor-side torque without the rotor's and the
+        gearbox's own inertia, times the ratio) against its rated (RMS) and peak output torques."""
+        out = (np.asarray(base.total, float) - self.tr.inertia * np.asarray(base.eps, float)) * self.entry.ratio
+        t = np.linspace(0.0, 1.0, out.size)   # equal time steps over the cycle
+        peak, rms, _, _ = cycle_values(out, np.zeros_like(out), np.zeros_like(out), t)
+        return [Check("gearbox_peak_output_torque", float(peak), self.entry.peak_output_torque, "N m"),
+                Check("gearbox_rated_output_torque", float(rms), self.entry.rated_output_torque, "N m")]
+
+
+def transmission_choices(problem, spec, teeth, cat) -> list:
+    """What a sizing tries beside the motors: the catalogue's pulleys (``teeth``, else the problem's range), the
+    catalogue's gearboxes (``[drive] gearboxes``) on a transmission with a ratio, else the problem's own."""
+    tr = problem.transmission
+    if not hasattr(tr, "radius"):  # nothing to choose but a gearbox: the problem's screw and lever, its ratio
+        if teeth:
+            raise ProblemError("--pulley-teeth", "", f"the problem's transmission is a {tr.name}, not a belt pulley")
+        if spec.gearbox_file is not None:
+            from .gearboxes import load_gearboxes
+
+            return [GearboxChoice(tr.with_gearbox(g), g) for g in load_gearboxes(spec.gearbox_file)]
+        return [FixedTransmission(tr)]
+    if not teeth:
+        pulleys = cat.pulleys_of(spec.profile, spec.teeth_min, spec.teeth_max)
+        if not pulleys:
+            raise ProblemError(spec.file, "drive.pulley_teeth_min", f"no {spec.profile} pulley in the catalogue between "
+                                                                   f"{spec.teeth_min} and {spec.teeth_max} teeth")
+        return pulleys
+    pulleys = []
+    for z in teeth:
+        found = [p for p in cat.pulleys_of(spec.profile) if p.teeth == z]
+        if not found:
+            have = ", ".join(str(p.teeth) for p in cat.pulleys_of(spec.profile))
+            raise ProblemError("--pulley-teeth", "", f"no {spec.profile} pulley with {z} teeth in the catalogue "
+                                                     f"(have {have})")
+        pulleys += found
+    return pulleys
 
 
 @dataclass
@@ -175,6 +233,8 @@ def candidates(kin, motors, pulleys, load: Load, limits: DriveLimits, belt: Belt
                 checks = stepper_checks(total[k], base.omega, m, reflected, limits)
             else:
                 checks = build_checks(peak[k], rms[k], peak_speed, peak_force, m, reflected, limits, belt, p.teeth)
+            if isinstance(p, GearboxChoice):
+                checks = checks + p.checks(base)
             cand = Candidate(m, p, spm, checks, terms, float(360.0 * kin.t[i] / period))
             if cand.stepper:
                 ratio = pull_out_ratio(total[k], base.omega, m)
@@ -187,9 +247,12 @@ def candidates(kin, motors, pulleys, load: Load, limits: DriveLimits, belt: Belt
     return out
 
 
-def rank(candidates: list[Candidate]) -> list[Candidate]:
+def rank(candidates: list[Candidate], choose: str = "least_overload") -> list[Candidate]:
     """Feasible pairs first; then by the thesis's criterion, the theoretical overload
-    (peak load torque / rated torque, thesis 4.6), lowest first; ties by inertia ratio."""
+    (peak load torque / rated torque, thesis 4.6), lowest first; ties by inertia ratio. ``choose =
+    "smallest_motor"`` (``[drive] choose``): the least rated torque first, ties by the least RMS torque."""
+    if choose == "smallest_motor" and not any(c.stepper for c in candidates):
+        return sorted(candidates, key=lambda c: (not c.feasible, c.motor.rated_torque, c.check("rms_torque").value))
     # a stepper's load ratio is its demand against the pull-out curve
     return sorted(candidates, key=lambda c: (not c.feasible, c.check("pull_out_torque" if c.stepper else "overload").value,
                                              c.check("inertia_ratio").value))
@@ -262,25 +325,7 @@ def size_drive(problem, spm: float | None = None, *, catalogue=None, motors=None
         list(cat.steppers.values()) if stepper else list(cat.motors.values())
     if len({getattr(m, "kind", "servo") for m in chosen}) > 1:
         raise ProblemError("--motor", "", "size servo motors and steppers in separate runs (their checks differ)")
-    if not hasattr(problem.transmission, "radius"):  # nothing to choose: the problem's screw and lever
-        if teeth:
-            raise ProblemError("--pulley-teeth", "", f"the problem's transmission is a {problem.transmission.name}, "
-                                                     "not a belt pulley")
-        pulleys = [FixedTransmission(problem.transmission)]
-    elif teeth:
-        pulleys = []
-        for z in teeth:
-            found = [p for p in cat.pulleys_of(spec.profile) if p.teeth == z]
-            if not found:
-                have = ", ".join(str(p.teeth) for p in cat.pulleys_of(spec.profile))
-                raise ProblemError("--pulley-teeth", "", f"no {spec.profile} pulley with {z} teeth in the catalogue "
-                                                         f"(have {have})")
-            pulleys += found
-    else:
-        pulleys = cat.pulleys_of(spec.profile, spec.teeth_min, spec.teeth_max)
-        if not pulleys:
-            raise ProblemError(spec.file, "drive.pulley_teeth_min", f"no {spec.profile} pulley in the catalogue between "
-                                                                   f"{spec.teeth_min} and {spec.teeth_max} teeth")
+    pulleys = transmission_choices(problem, spec, teeth, cat)
     belt = spec.belt_spec(cat)
     stroke = stroke if stroke is not None else problem.stroke(spm)
     kin = stroke.sample(samples)
@@ -310,10 +355,11 @@ def size_drive(problem, spm: float | None = None, *, catalogue=None, motors=None
         "belt_cord": belt.cord if belt else None,
         "belt_service_factor": belt.service_factor if belt else None,
         "law": stroke.label,
+        "choose": spec.choose,
         "samples": samples,
         "catalogue_files": cat.files,
     }
-    return Sizing(problem.name, spm, stroke.period, rank(cands), inputs, kin, spec.load, spec.limits,
+    return Sizing(problem.name, spm, stroke.period, rank(cands, spec.choose), inputs, kin, spec.load, spec.limits,
                   resolution if find_max_spm else None)
 
 

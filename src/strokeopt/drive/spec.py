@@ -35,6 +35,12 @@ class DriveSpec:
     allowable_tension: float | None = None
     catalogue_files: tuple[str, ...] = ()
     file: str = ""
+    #: the gearboxes ``size`` chooses from for a transmission with a ratio (a gearbox, a linkage's crank): a
+    #: catalogue file (gearboxes.py), None: the problem's own ratio
+    gearbox_file: str | None = None
+    #: how ``size`` ranks the pairs that fit: the least overload (the thesis's criterion: the most reserve) or
+    #: the smallest motor (least rated torque, then least RMS torque: the cheapest that carries the cycle)
+    choose: str = "least_overload"
 
     def catalogue(self, extra_files=()):
         """The shipped catalogue plus this problem's and ``extra_files``' catalogue files."""
@@ -153,10 +159,36 @@ def parse_drive(f, base_dir: Path | None = None, model=None, reference=None, rot
         row.finish()
     if len({x.name for x in members}) != len(members):
         raise f.error("members", "two members have the same name")
+    gearboxes = _gearbox_file(f, base_dir, transmission)
+    choose = f.string("choose", "least_overload", choices=RANKINGS)
     f.finish()
     efficiency = getattr(transmission, "efficiency", 1.0)
     return DriveSpec(motor, Load(mass, gravity, tuple(forces), tuple(members), efficiency), limits, profile, tmin, tmax, belt,
-                     cord, service, allowable, tuple(resolved), f.file)
+                     cord, service, allowable, tuple(resolved), f.file, gearboxes, choose)
+
+
+#: ``[drive] choose``: how ``size`` ranks the pairs that fit (DriveSpec.choose)
+RANKINGS = ("least_overload", "smallest_motor")
+
+
+def _gearbox_file(f, base_dir: Path | None, transmission) -> str | None:
+    """``[drive] gearboxes``: a gearbox catalogue beside the problem, or the shipped one by its file name; refused
+    for a transmission without a ratio to choose (``with_gearbox``)."""
+    name = f.string("gearboxes", None)
+    if name is None:
+        return None
+    if transmission is not None and not hasattr(transmission, "with_gearbox"):
+        raise f.error("gearboxes", f"chooses the ratio of a gearbox or a linkage's crank drive; the transmission, a "
+                                   f"{transmission.label}, has none to choose")
+    from .gearboxes import gearbox_catalogue_file
+
+    path = resolve_catalogue_file(name, base_dir)
+    if path is None and name == gearbox_catalogue_file().name:
+        path = gearbox_catalogue_file()   # the shipped gearboxes, named by their file name
+    if path is None:
+        raise f.error("gearboxes", f"gearbox catalogue {name!r} not found (looked for {(base_dir or Path('.')) / name}, "
+                                   f"and strokeopt ships {gearbox_catalogue_file().name})")
+    return str(path)
 
 
 

@@ -1,16 +1,11 @@
-"""Transmissions: motor angle -> load position.
-
-A transmission is its position function ``x = f(phi)`` (metres from radians),
-written once with CasADi operations. Its first and second transfer functions
-``mu = dx/dphi`` and ``nu = d2x/dphi2`` come from algorithmic differentiation,
-so a position-dependent transmission (crank, screw and lever) needs nothing
+"""Transmissions: motor angle -> load position. A transmission is its position function ``x = f(phi)`` (metres
+from radians), written once with CasADi operations; its transfer functions ``mu = dx/dphi`` and ``nu = d2x/dphi2``
+come from algorithmic differentiation, so a position-dependent transmission (crank, screw and lever) needs nothing
 but its position function.
 
-Where it sits: first in the drive package. The toothed-pulley geometry
-(:data:`PROFILE_PITCH`, :func:`pitch_diameter`) is here, once: the problem's
-``[transmission]`` (a :class:`BeltPulley` with its teeth), the catalogue's
-pulleys (catalogue.py) and the design's pulley search all use it. load.py
-turns a load motion into motor torque through a transmission.
+Where it sits: first in the drive package. The toothed-pulley geometry (:data:`PROFILE_PITCH`,
+:func:`pitch_diameter`) is here, once: the problem's ``[transmission]``, the catalogue's pulleys (catalogue.py) and
+the design's pulley search all use it. load.py turns a load motion into motor torque through a transmission.
 """
 
 from __future__ import annotations
@@ -26,12 +21,8 @@ from .load import read_efficiency
 
 
 class Transmission:
-    """Base: subclasses define :meth:`position` (CasADi-friendly) and, to be driven
-    from a prescribed load motion, :meth:`inverse_position`.
-
-    ``inertia`` [kg m^2] is the moment of inertia the transmission adds on the
-    motor shaft (a pulley, a screw); the drive adds it to the rotor's.
-    """
+    """Base: subclasses define :meth:`position` (CasADi-friendly) and, to be driven from a prescribed load motion,
+    :meth:`inverse_position`. ``inertia`` [kg m^2]: what the transmission adds on the motor shaft (a pulley)."""
 
     name = "transmission"
     #: the transmission in words, for reports ("belt pulley")
@@ -44,6 +35,9 @@ class Transmission:
     #: whether the transmission's own bodies carry the load's masses (a linkage's links): the ``[drive]`` moving
     #: mass or inertia is then only what is added to its output, zero by default
     carries_load = False
+    #: the tables a file of this transmission means where it states no ``[timing]`` (a linkage: its crank turning
+    #: at constant speed), merged under the file's own; None: it must state one
+    implied = None
 
     @classmethod
     def read(cls, fields, timing) -> "Transmission":
@@ -174,6 +168,10 @@ class Transmission:
     def facts(self) -> list[tuple[str, object]]:
         """What a report states of the transmission: ``(label with its unit, value)`` rows."""
         return []
+
+    def analysis(self, problem, with_dynamics: bool = False) -> dict | None:
+        """What ``kinematics``, ``size``, ``report`` add of its own (a linkage's outputs, index, crank torque)."""
+        return None
 
     def load_switches(self) -> tuple[float, ...]:
         """The load positions where a torque of :meth:`own_terms` jumps (a linkage's process load switched on or
@@ -458,6 +456,12 @@ class Gearbox(Transmission):
 
     def facts(self):
         return [("gear ratio [motor turns per output turn]", self.ratio)]
+
+    def with_gearbox(self, entry) -> "Gearbox":
+        """The same drive through the catalogue's gearbox ``entry`` (drive/gearboxes.py): its ratio and inertia."""
+        tr = Gearbox(entry.ratio, entry.inertia, entry.name)
+        tr.efficiency = self.efficiency
+        return tr
 
     def position(self, phi):
         return phi / self.ratio

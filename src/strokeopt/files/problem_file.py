@@ -26,22 +26,12 @@ from ..problem import Problem, parse_problem
 EXTENDS_DEPTH_MAX = 8
 
 
-#: What a linkage file without a [timing] is for, where a command that designs a stroke is given one.
-LINKAGE_FILE_HERE = ('"linkage" without a [timing]: the linkage on a crank at constant speed, read by strokeopt '
-                     'linkage, kinematics, size and report; a stroke is designed where [timing] states the motion '
-                     'of one of its outputs driven by a servo on the crank (problems/blind_stitch_servo.toml), or '
-                     'of a member driven by a motor directly (the loom\'s sley: problems/loom_beatup_servo.toml)')
-
-
 def load_problem(path: str | Path, overrides: list[str] | None = None) -> Problem:
     """Read, extend, override and validate a problem file; ``overrides`` are ``--set`` texts
     (``"machine.spm=600"``)."""
     path = Path(path)
     file = str(path)
     data = read_problem_data(path)
-    transmission = data.get("transmission")
-    if isinstance(transmission, dict) and transmission.get("type") == "linkage" and "timing" not in data:
-        raise ProblemError(file, "transmission.type", LINKAGE_FILE_HERE)
     if isinstance(overrides, str):  # one override given as a string, not as a list of them
         overrides = [overrides]
     overrides = list(overrides or [])

@@ -17,7 +17,6 @@ from pathlib import Path
 from ..errors import ProblemError
 from ..io.fields import Fields, apply_overrides
 from .model import Crank, Joint, Link, Linkage, Load, Output
-from .sizing import CrankDrive, read_crank_drive
 
 KGF_CM_S2 = 9.80665 * 0.01    # kg m^2 per kgf cm s^2 (1 kgf = 9.80665 N, 1 cm = 0.01 m)
 KINDS = ("angle", "arc", "x", "y")
@@ -38,24 +37,11 @@ class LinkageProblem:
     near_dwell_pct: float           # near dwell: output within this share of the swing of an extreme
     angles: int                     # samples per turn
     synthesis: dict = field(default_factory=dict)   # [synthesis] as read (synthesis.py checks it)
-    drive: CrankDrive = field(default_factory=CrankDrive)   # [drive]: what `size` puts on the crank
 
     @property
     def omega(self) -> float:
         """Crank speed [rad/s]."""
         return self.rpm * 2 * math.pi / 60
-
-
-def is_linkage_file(path) -> bool:
-    """Whether ``path`` is a linkage problem file (``[transmission] type = "linkage"`` and no ``[timing]``: the
-    crank at constant speed); False for any other file (a servo on a linkage's crank states its motion in
-    ``[timing]``: a design problem) or one that cannot be read (its own reader then says why)."""
-    try:
-        data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
-        return False
-    tr = data.get("transmission")
-    return isinstance(tr, dict) and tr.get("type") == "linkage" and "timing" not in data
 
 
 def load_linkage_file(path, overrides: list[str] | None = None, check_cycle: bool = True) -> LinkageProblem:
@@ -80,18 +66,20 @@ def load_linkage_file(path, overrides: list[str] | None = None, check_cycle: boo
     description = prob.string("description", "")
     prob.finish()
     machine = top.table("machine")
-    rpm = machine.number("rpm", min=1, max=20000)          # crank speeds of textile machines, 1-20000 /min
-    gravity = machine.number("gravity_m_s2", 0.0, min=0, max=20)   # 0: no gravity; 9.81 along -y
+    # the crank turns once a machine cycle: its rpm is the machine's rate (1-20000 /min, as any problem's spm)
+    rpm = machine.number("spm", min=1, max=20000)
+    machine.string("cycle", "stitch")   # what a cycle is called: the problem reader checks it
     machine.finish()
     tr = top.table("transmission")
     tr.string("type", choices=("linkage",))
+    gravity = tr.number("gravity_m_s2", 0.0, min=0, max=20)   # 0: no gravity; 9.81 along -y
     linkage, limits = read_linkage(tr, file, name, gravity)
     tr.finish()
     synth = top.table("synthesis", required=False)
     synthesis = dict(synth.data) if synth is not None else {}   # checked below by targets.read_spec
-    drive = read_crank_drive(top.table("drive", required=False), Path(path).parent)
+    top.raw("drive", None)   # the motor and gearbox on the crank: the problem reader's ([drive], `strokeopt size`)
     top.finish()
-    problem = LinkageProblem(file, name, description, linkage, rpm, *limits, synthesis, drive)
+    problem = LinkageProblem(file, name, description, linkage, rpm, *limits, synthesis)
     if synth is not None:   # checked now (names, ranges, misspelt keys), used by --synthesize
         from .targets import read_spec
 
@@ -128,14 +116,13 @@ def blame_the_set(exc: ProblemError, data: dict, overridden: frozenset) -> Probl
     return ProblemError(exc.file, ", ".join(moved), f"{what} as set by --set: {exc.message}")
 
 
-def read_linkage(tr: Fields, file: str, name: str, gravity: float, analysis: bool = True):
+def read_linkage(tr: Fields, file: str, name: str, gravity: float):
     """The :class:`Linkage` of a ``[transmission]`` table ``tr`` (joints, links, crank, outputs, loads) and its
-    limits ``(min_transmission_index, near_dwell_pct, angles)``; without ``analysis`` (a linkage as a problem's
-    transmission) ``near_dwell_pct``, a criterion of the crank at constant speed, is not read (None)."""
+    limits ``(min_transmission_index, near_dwell_pct, angles)``."""
     fields: dict[str, str] = {"structure": tr.where("links")}
     ref_deg = tr.number("reference_angle_deg", 0.0, min=-360, max=360)   # input angle at the reference pose
     index_min = tr.number("min_transmission_index", 0.0, min=0, max=1)   # sin(Alt's angle) of a dyad
-    dwell = tr.number("near_dwell_pct", 5.0, min=0.1, max=50) if analysis else None  # loom: 5 % of the swing
+    dwell = tr.number("near_dwell_pct", 5.0, min=0.1, max=50)   # loom: 5 % of the swing
     angles = tr.number("angles", 720, min=36, max=36000, integer=True)    # samples per turn
     joints: list[Joint] = []
     for jf in tr.tables("joints"):

@@ -96,7 +96,16 @@ def summarize(problem, with_dynamics: bool | None = None) -> dict:
                "transmission": trans, "near_dwell_pct": problem.near_dwell_pct}
     has_mass = any(link.mass > 0 or link.inertia_cg > 0 for link in problem.linkage.links) or problem.linkage.loads
     if with_dynamics or (with_dynamics is None and has_mass):
-        summary["dynamics"] = analyse_dynamics(kin, cycle, problem.omega).to_dict()
+        dyn = analyse_dynamics(kin, cycle, problem.omega)
+        summary.update(dynamics=dyn.to_dict(), terms=dynamics_table(dyn), gravity_m_s2=problem.linkage.gravity,
+                       process_loads=[{"name": ld.name, "link": ld.link, "joint": ld.joint,
+                                       "from_deg": round(math.degrees(ld.start), 6),
+                                       "to_deg": round(math.degrees(ld.end), 6), "force_start_N": ld.force_start,
+                                       "force_end_N": ld.force_end, "direction_deg": round(math.degrees(ld.direction), 6)}
+                                      for ld in problem.linkage.loads],
+                       note=None if has_mass else "the file states no masses, inertias or process loads: the crank "
+                                                  "needs no torque, and a sizing checks only the motors' speed and the "
+                                                  "gearboxes' inertia")
     return summary
 
 
@@ -110,26 +119,3 @@ def dynamics_table(dyn, step_deg: float = TABLE_STEP_DEG) -> list[dict]:
              "gravity_torque_N_m": float(dyn.gravity_torque[k]), "process_torque_N_m": float(dyn.load_torque[k]) + 0.0,
              "torque_N_m": float(dyn.torque[k]), "torque_newton_euler_N_m": float(dyn.torque_ne[k])}
             for k in range(0, len(th), step)]
-
-
-def size_summary(problem, motors: list[str] | None = None, extra_catalogues=(), explain: bool = False) -> dict:
-    """What ``strokeopt size`` reports for a linkage problem: the crank torque over the cycle at the file's rpm
-    (its terms, the process loads' windows, Newton-Euler's check) and a servo motor and gearbox on the crank
-    (sizing.size_crank); ``status`` 'infeasible' when no pair carries the cycle."""
-    from .sizing import size_crank
-
-    kin = kinematics_of(problem.linkage)
-    cycle = kin.solve(problem.angles)
-    dyn = analyse_dynamics(kin, cycle, problem.omega)
-    sizing = size_crank(dyn, problem.drive, motors, extra_catalogues)
-    loads = [{"name": ld.name, "link": ld.link, "joint": ld.joint, "from_deg": round(math.degrees(ld.start), 6),
-              "to_deg": round(math.degrees(ld.end), 6), "force_start_N": ld.force_start, "force_end_N": ld.force_end,
-              "direction_deg": round(math.degrees(ld.direction), 6)} for ld in problem.linkage.loads]
-    massless = not (any(k.mass > 0 or k.inertia_cg > 0 for k in problem.linkage.links) or problem.linkage.loads)
-    note = ("the file states no masses, inertias or process loads: the crank needs no torque, and the sizing checks "
-            "only the motors' speed and the gearboxes' inertia" if massless else None)
-    return {"status": "ok" if sizing.chosen is not None else "infeasible", "problem": problem.name, "note": note,
-            "file": problem.file, "rpm": problem.rpm, "omega_rad_s": problem.omega,
-            "gravity_m_s2": problem.linkage.gravity, "process_loads": loads,
-            "transmission": transmission_summary(kin, cycle, problem.min_transmission_index), "dynamics": dyn.to_dict(),
-            "terms": dynamics_table(dyn), "sizing": sizing.to_dict(explain)}

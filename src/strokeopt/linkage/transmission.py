@@ -23,6 +23,7 @@ A crank that turns through the extremes (the hybrid, designed in crank coordinat
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 from functools import lru_cache
@@ -91,6 +92,15 @@ class LinkageTransmission(Transmission):
     label = "planar linkage"
     load_unit = None  # the output's: "rad" for an angle, "m" for an arc or a coordinate
     carries_load = True  # the links' masses are the load's
+    #: a linkage file without [timing]: its crank at constant speed, one turn a machine cycle from the reference
+    #: pose (a move of a whole turn that ends at the speed it starts with: the classic stroke turns it uniformly)
+    implied = {"timing": {"start_position_deg": 0.0, "advance_deg": 360.0,
+                          "intervals": [{"name": "turn", "span_deg": 360.0, "stroke_deg": 360.0, "direction": "up",
+                                         "end": "speed"}]},
+               "motion": {"law": "poly5_speeds", "start_speed": 1.0, "end_speed": 1.0},   # = constant speed
+               "transmission": {"coordinates": "crank"}}
+    #: the limits of the linkage's own analysis (``[transmission]`` min_transmission_index, near_dwell_pct)
+    min_transmission_index, near_dwell_pct = 0.0, 5.0
 
     @classmethod
     def read(cls, fields, timing) -> "LinkageTransmission":
@@ -286,6 +296,34 @@ class LinkageTransmission(Transmission):
             theta = theta - (self.fit.y(theta) - x) / self._dy(theta)
         return self.ratio * (theta - self.theta_ref)
 
+    def with_gearbox(self, entry) -> "LinkageTransmission":
+        """The same linkage with the catalogue's gearbox ``entry`` (drive/gearboxes.py) between motor and crank."""
+        tr = copy.copy(self)
+        for cached in ("_fns", "_inv", "_stage_fns"):   # functions of the motor angle: built again for this ratio
+            tr.__dict__.pop(cached, None)
+        tr.ratio, tr.inertia, tr.gearbox = float(entry.ratio), float(entry.inertia), entry.name
+        return tr
+
+    def analysis(self, problem, with_dynamics: bool = False) -> dict | None:
+        """The linkage with its crank turning at the constant speed of one turn a machine cycle (linkage/summary.py:
+        structure, every output's swing, near-dwells and asymmetry, the transmission index against its limit; with
+        ``with_dynamics`` the crank torque checked by Newton-Euler); None where the crank oscillates on a branch."""
+        if self.coordinates != "crank":
+            return None
+        from .summary import summarize
+
+        return summarize(self.at_constant_speed(problem), with_dynamics=with_dynamics)
+
+    def at_constant_speed(self, problem):
+        """The linkage of ``problem`` with its crank at the constant speed of one turn a cam cycle, as the linkage
+        package analyses it (:class:`~strokeopt.linkage.files.LinkageProblem`)."""
+        from .files import LinkageProblem
+
+        turns = problem.timing.cam_revolutions_per_stitch   # crank turns a machine cycle
+        return LinkageProblem(str(problem.file), problem.name, problem.description, self.linkage, problem.spm * turns,
+                              self.min_transmission_index, self.near_dwell_pct, self.samples,
+                              dict(problem.data.get("synthesis") or {}))
+
     def __repr__(self) -> str:
         return f"LinkageTransmission(output={self.output!r}, ratio={self.ratio:g}, harmonics={self.fit.y.harmonics})"
 
@@ -322,7 +360,7 @@ def read_linkage_transmission(cls, fields, timing) -> LinkageTransmission:
                                         and 0 < abs(crank_range[1] - crank_range[0]) < 360):
         raise fields.error("crank_range_deg", "must be [from, to] in deg of crank angle, less than a turn apart")
     try:
-        linkage, (index_min, _, angles) = read_linkage(fields, fields.file, "linkage", gravity, analysis=False)
+        linkage, (index_min, dwell_pct, angles) = read_linkage(fields, fields.file, "linkage", gravity)
     except ProblemError as exc:
         raise _blamed(fields, exc) from None
     names = [o.name for o in linkage.outputs]
@@ -352,11 +390,14 @@ def read_linkage_transmission(cls, fields, timing) -> LinkageTransmission:
         check_reach(tr, fields, "crank_range_deg" if crank_range is not None else "output", timing,
                     "positions within the branch, or another crank_range_deg")
         smallest = tr.smallest_index()
-        if smallest < index_min:
+        # on a branch the design chooses, refused here; a crank that turns passes every pose of the file's linkage,
+        # judged by its analysis (kinematics, size and report exit 1 below the limit)
+        if smallest < index_min and coordinates == "output":
             raise fields.error("min_transmission_index", f"the linkage's transmission index falls to {smallest:.3g} "
                                                          f"over the crank range, below {index_min:g}")
     except ProblemError as exc:
         raise _blamed(fields, exc) from None
     fields.finish()
+    tr.min_transmission_index, tr.near_dwell_pct = index_min, dwell_pct
     return tr
 

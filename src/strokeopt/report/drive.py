@@ -81,17 +81,20 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
         f"{inp['max_inertia_ratio']:g}; " + (f"belt {inp['belt']} ({inp['belt_cord']} cord, service factor "
                                              f"{inp['belt_service_factor']})" if inp['belt'] is not None
                                              else "no belt checked"),
-        "ranked: feasible first, then by overload (peak / rated torque); 'binding' = the check with the "
-        "least margin\n",
+        ("ranked: feasible first, then the smallest motor (least rated torque), ties by the least RMS torque"
+         if inp.get("choose") == "smallest_motor" else "ranked: feasible first, then by overload (peak / rated torque)")
+        + "; 'binding' = the check with the least margin\n",
     ]
     if "drive" in report:
         d = report["drive"]
         names = lambda v: ", ".join(map(str, v)) if isinstance(v, list) else v  # noqa: E731
         what = (f"pulleys {names(d['pulley_teeth'])}" if d.get("transmission") is None
-                else f"the problem's {d['transmission']}")
+                else f"the problem's {d['transmission']}" + (f" through every gearbox of {d['gearboxes']}"
+                                                             if d.get("gearboxes") else ""))
         lines.insert(3, f"drive: motors {names(d['motors'])}; {what} (from {d['from']})")
     belt = any(c.pulley.teeth is not None for c in sizing.candidates)  # no z and PD columns without a pulley
-    cols = [("motor", "motor")] + ([("pulley_teeth", "z"), ("pulley_pitch_diameter_mm", "PD mm")] if belt else []) + [
+    gears = [("gearbox", "gearbox"), ("ratio", "i")] if any("gearbox" in c for c in report["candidates"]) else []
+    cols = [("motor", "motor")] + gears + ([("pulley_teeth", "z"), ("pulley_pitch_diameter_mm", "PD mm")] if belt else []) + [
             ("peak_torque_N_m", "peak N m"), ("torque_limit_N_m", "limit N m"), ("rms_torque_N_m", "RMS N m"),
             ("overload_pct", "overload %"),
             ("peak_speed_rpm", "speed rpm"), ("inertia_ratio", "J ratio"), ("feasible", "feasible"),

@@ -166,30 +166,17 @@ TERM_COLUMNS = [("angle_deg", "crank deg"), ("J_kg_m2", "J kg m^2"), ("dJ_kg_m2_
                 ("torque_newton_euler_N_m", "Newton-Euler N m")]
 
 
-def linkage_size_text(s: dict, explain: bool = False) -> str:
-    """The text of ``strokeopt size`` for a linkage (linkage.summary.size_summary)."""
-    d, z = s["dynamics"], s["sizing"]
-    lines = [f"{s['problem']}  ({s['file']})",
-             f"crank {s['rpm']:g} rpm = {s['omega_rad_s']:.4f} rad/s, constant; gravity {s['gravity_m_s2']:g} m/s^2 "
+def dynamics_text(s: dict) -> str:
+    """The crank torque of a linkage at constant crank speed (``summarize(..., with_dynamics=True)``): the process
+    loads, the power balance and its terms, Newton-Euler's check."""
+    lines = [f"crank {s['rpm']:g} rpm = {s['omega_rad_s']:.4f} rad/s, constant; gravity {s['gravity_m_s2']:g} m/s^2 "
              "along -y"]
     for ld in s["process_loads"]:
         lines.append(f"process load {ld['name']} on {ld['link']} at {ld['joint']}: {ld['force_start_N']:g} -> "
                      f"{ld['force_end_N']:g} N over crank {ld['from_deg']:g} -> {ld['to_deg']:g} deg, "
                      f"{ld['direction_deg']:g} deg from the link's line")
     lines += [f"note: {s['note']}"] if s.get("note") else []
-    lines += [_dynamics_text(d), format_table(s["terms"][::max(1, len(s["terms"]) // 36)], TERM_COLUMNS), "",
-              f"{z['drive']}; motors from {', '.join(z['motors_from'])}, gearboxes from {z['gearboxes_from']}",
-              format_table(z["candidates"], SIZE_COLUMNS)]
-    c = z["chosen"]
-    if c is None:
-        lines.append("infeasible: no motor and gearbox carries the crank")
-    else:
-        lines.append(f"chosen: {c['motor']} with {c['gearbox']} (i = {c['ratio']:g}), the smallest motor that fits, "
-                     f"then the least RMS: peak {c['peak_torque_N_m']:.4g} N m, RMS {c['rms_torque_N_m']:.4g} N m at "
-                     f"{c['motor_speed_rpm']:.0f} rpm; binding {c['binding']} (margin {c['margin']:.3f})")
-        if explain:
-            lines.append(format_table(c["checks"], [("name", "check"), ("value", "value"), ("limit", "limit"),
-                                                    ("unit", "unit"), ("margin", "margin"), ("ok", "ok")]))
+    lines += [_dynamics_text(s["dynamics"]), format_table(s["terms"][::max(1, len(s["terms"]) // 36)], TERM_COLUMNS)]
     return "\n".join(lines)
 
 
@@ -216,11 +203,35 @@ def plot_linkage_size(kin, cycle, dyn, summary: dict, path, poses: int = 6) -> N
     twin.set_ylabel("J' [kg m^2/rad] (orange)")
     for a in ax.flat:
         a.grid(alpha=0.3)
-    z = summary["sizing"]["chosen"]
-    fig.suptitle(f"{summary['problem']} at {summary['rpm']:g} rpm"
-                 + (f": {z['motor']}, {z['gearbox']} on the crank" if z else ": no motor and gearbox fits"))
+    fig.suptitle(f"{summary['problem']}: the crank at a constant {summary['rpm']:g} rpm")
     fig.tight_layout()
     if path is None:
         return fig
     fig.savefig(path)
     plt.close(fig)
+
+
+def plot_analysis(problem, summary: dict, path) -> None:
+    """The figure of a linkage transmission's own analysis (``Transmission.analysis``): the mechanism, its first
+    output over the crank angle (with the file's synthesis targets where they are of that output), the
+    transmission index."""
+    from ..linkage.kinematics import kinematics_of
+
+    tr = problem.transmission
+    kin = kinematics_of(tr.linkage)
+    cycle = kin.solve(tr.samples)
+    syn = problem.data.get("synthesis") or {}
+    targets = None
+    if syn.get("output") == summary["outputs"][0]["name"] and "angles_deg" in syn:
+        t0 = math.degrees(tr.linkage.crank.reference_angle)
+        targets = ([(a - t0) % 360 for a in syn["angles_deg"]], syn["speeds_m_s"])
+    plot_linkage(kin, cycle, summary, path, targets)
+
+
+def analysis_failure(summary: dict) -> str | None:
+    """The limit a transmission's own analysis fails (its transmission index), in one line; None when it passes."""
+    if summary["status"] == "ok":
+        return None
+    bad = next(t for t in summary["transmission"] if not t["ok"])
+    return (f"the transmission index of {', '.join(bad['links'])} falls to {bad['min_index']:.3g} at {bad['at_deg']:g} "
+            f"deg, below the limit {bad['limit']:g}")

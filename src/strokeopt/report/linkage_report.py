@@ -23,8 +23,8 @@ class LinkageReportData:
     """What the report shows: the kinematics and size summaries (the commands' JSON), the solved cycle and its
     dynamics for the figures, the servo comparison or None, and where the page comes from."""
 
-    kinematics: dict              # linkage.summary.summarize(problem, with_dynamics=False)
-    size: dict                    # linkage.summary.size_summary(problem)
+    kinematics: dict              # the transmission's analysis (Transmission.analysis: linkage.summary.summarize)
+    size: dict                    # the report of `strokeopt size --json`, with the analysis's crank torque
     kin: Any                      # linkage.kinematics.Kinematics
     cycle: Any                    # its Cycle at the file's angles
     dynamics: Any                 # linkage.dynamics.Dynamics at the file's rpm
@@ -38,20 +38,20 @@ class LinkageReportData:
 def _structure(d: LinkageReportData) -> str:
     k = d.kinematics
     st = k["structure"]
-    facts = [("problem", k["problem"], "kinematics.problem"), ("file", k["file"], None),
-             ("crank speed [rpm]", k["rpm"], "kinematics.rpm"), ("crank speed [rad/s]", k["omega_rad_s"],
-                                                                 "kinematics.omega_rad_s"),
-             ("mobility (Gruebler)", st["mobility"], "kinematics.structure.mobility"),
-             ("links (with the ground)", st["links"], "kinematics.structure.links"),
-             ("revolute joints", st["revolute_joints"], "kinematics.structure.revolute_joints"),
-             ("independent loops", st["independent_loops"], "kinematics.structure.independent_loops"),
-             ("largest closure residual [m]", k["closure"]["max_residual_m"], "kinematics.closure.max_residual_m"),
-             ("pose after one turn, off by [m]", k["closure"]["return_error_m"], "kinematics.closure.return_error_m")]
+    facts = [("problem", k["problem"], "kinematics.transmission_analysis.problem"), ("file", k["file"], None),
+             ("crank speed [rpm]", k["rpm"], "kinematics.transmission_analysis.rpm"), ("crank speed [rad/s]", k["omega_rad_s"],
+                                                                 "kinematics.transmission_analysis.omega_rad_s"),
+             ("mobility (Gruebler)", st["mobility"], "kinematics.transmission_analysis.structure.mobility"),
+             ("links (with the ground)", st["links"], "kinematics.transmission_analysis.structure.links"),
+             ("revolute joints", st["revolute_joints"], "kinematics.transmission_analysis.structure.revolute_joints"),
+             ("independent loops", st["independent_loops"], "kinematics.transmission_analysis.structure.independent_loops"),
+             ("largest closure residual [m]", k["closure"]["max_residual_m"], "kinematics.transmission_analysis.closure.max_residual_m"),
+             ("pose after one turn, off by [m]", k["closure"]["return_error_m"], "kinematics.transmission_analysis.closure.return_error_m")]
     groups = [[h.cell(g["kind"]), h.cell(", ".join(g["links"])), h.cell(", ".join(g["joints"])),
                h.cell(", ".join(g["attached_to"]))] for g in st["groups"] if g["kind"] != "placement"]
     loops = [[h.cell("-".join(f["joints"])), h.cell(", ".join(f["links"])), h.cell(f["grashof"]), h.cell(f["class"]),
               h.cell(f["relative_to"])] for f in st["four_bar_loops"]]
-    lengths = [[h.cell(link), h.cell(pair), h.cell(mm, f"kinematics.link_lengths_mm.{link}.{pair}")]
+    lengths = [[h.cell(link), h.cell(pair), h.cell(mm, f"kinematics.transmission_analysis.link_lengths_mm.{link}.{pair}")]
                for link, pairs in k["link_lengths_mm"].items() for pair, mm in pairs.items()]
     return (h.key_table(facts) + h.heading("Groups solved together") + h.table(["kind", "links", "joints",
                                                                                 "attached to"], groups)
@@ -65,7 +65,7 @@ OUTPUT_FACTS = [("swing", "swing_{unit}", "{unit}"), ("minimum at", "minimum_at_
 
 
 def _output(o: dict, i: int, pct: float) -> str:
-    key = f"kinematics.outputs[{i}]"
+    key = f"kinematics.transmission_analysis.outputs[{i}]"
     facts = [(f"{label} [{unit.format(unit=o['unit'])}]", o[name.format(unit=o["unit"])],
               f"{key}.{name.format(unit=o['unit'])}") for label, name, unit in OUTPUT_FACTS]
     for j, dw in enumerate(o["near_dwells"]):
@@ -100,7 +100,7 @@ def _transmission(d: LinkageReportData) -> str:
 
     rows = []
     for i, t in enumerate(d.kinematics["transmission"]):
-        key = f"kinematics.transmission[{i}]"
+        key = f"kinematics.transmission_analysis.transmission[{i}]"
         rows.append([h.cell(t["group"]), h.cell(", ".join(t["links"])), h.cell(t["min_index"], f"{key}.min_index"),
                      h.cell(t["at_deg"], f"{key}.at_deg"), h.cell(t.get("min_transmission_angle_deg")),
                      h.cell(t["limit"], f"{key}.limit"), h.raw_cell(h.verdict(t["ok"]))])
@@ -114,31 +114,29 @@ def _transmission(d: LinkageReportData) -> str:
 
 
 def _torque(d: LinkageReportData) -> str:
-    s, dyn = d.size, d.size["dynamics"]
+    s = d.size["transmission_analysis"]
+    dyn = s["dynamics"]
     t = dyn["torque_N_m"]
-    facts = [("crank torque max [N m]", t["max"], "size.dynamics.torque_N_m.max"),
-             ("at crank [deg]", t["max_at_deg"], "size.dynamics.torque_N_m.max_at_deg"),
-             ("crank torque min [N m]", t["min"], "size.dynamics.torque_N_m.min"),
-             ("at crank [deg]", t["min_at_deg"], "size.dynamics.torque_N_m.min_at_deg"),
-             ("crank torque RMS [N m]", t["rms"], "size.dynamics.torque_N_m.rms"),
+    facts = [("crank torque max [N m]", t["max"], "size.transmission_analysis.dynamics.torque_N_m.max"),
+             ("at crank [deg]", t["max_at_deg"], "size.transmission_analysis.dynamics.torque_N_m.max_at_deg"),
+             ("crank torque min [N m]", t["min"], "size.transmission_analysis.dynamics.torque_N_m.min"),
+             ("at crank [deg]", t["min_at_deg"], "size.transmission_analysis.dynamics.torque_N_m.min_at_deg"),
+             ("crank torque RMS [N m]", t["rms"], "size.transmission_analysis.dynamics.torque_N_m.rms"),
              ("reduced inertia J, least [kg m^2]", dyn["reduced_inertia_kg_m2"]["min"],
-              "size.dynamics.reduced_inertia_kg_m2.min"),
+              "size.transmission_analysis.dynamics.reduced_inertia_kg_m2.min"),
              ("reduced inertia J, largest [kg m^2]", dyn["reduced_inertia_kg_m2"]["max"],
-              "size.dynamics.reduced_inertia_kg_m2.max"),
+              "size.transmission_analysis.dynamics.reduced_inertia_kg_m2.max"),
              ("Newton-Euler against the power balance (of the peak)", dyn["newton_euler_max_relative_difference"],
-              "size.dynamics.newton_euler_max_relative_difference")]
+              "size.transmission_analysis.dynamics.newton_euler_max_relative_difference")]
     loads = [[h.cell(ld["name"]), h.cell(f"{ld['link']} at {ld['joint']}"), h.cell(ld["from_deg"]),
               h.cell(ld["to_deg"]), h.cell(ld["force_start_N"]), h.cell(ld["force_end_N"])] for ld in s["process_loads"]]
-    z = s["sizing"]
-    cands = [[h.cell(c["gearbox"]), h.cell(c["ratio"]), h.cell(c["motor"]),
-              h.cell(c["peak_torque_N_m"], f"size.sizing.candidates[{i}].peak_torque_N_m"),
-              h.cell(c["rms_torque_N_m"], f"size.sizing.candidates[{i}].rms_torque_N_m"),
-              h.cell(c["motor_speed_rpm"]), h.cell(c["inertia_ratio"]), h.raw_cell(h.verdict(c["feasible"], "fits", "no")),
+    z = d.size
+    cands = [[h.cell(c.get("gearbox", "-")), h.cell(c.get("ratio", "-")), h.cell(c["motor"]),
+              h.cell(c["peak_torque_N_m"], f"size.candidates[{i}].peak_torque_N_m"),
+              h.cell(c["rms_torque_N_m"], f"size.candidates[{i}].rms_torque_N_m"),
+              h.cell(c["peak_speed_rpm"]), h.cell(c["inertia_ratio"]), h.raw_cell(h.verdict(c["feasible"], "fits", "no")),
               h.cell(c["binding"])] for i, c in enumerate(z["candidates"])]
-    c = z["chosen"]
-    chosen = (f"Chosen: {c['motor']} with {c['gearbox']} (i = {c['ratio']:g}): the smallest motor that fits, then the "
-              f"least RMS torque; binding {c['binding']} (margin {c['margin']:.3f})." if c else
-              "No motor and gearbox of the catalogue carries the crank.")
+    chosen = f"{z['verdict']}."
     return (h.para(f"At a constant {s['rpm']:g} rpm the crank needs M = J' w^2 / 2 + V' - sum F (u . r') (power "
                    "balance); Newton-Euler's balances of every link give the same torque.")
             + (h.para("Note: " + s["note"], "note") if s.get("note") else "") + h.key_table(facts)
@@ -148,8 +146,12 @@ def _torque(d: LinkageReportData) -> str:
                            "The mechanism and the transmission index; the crank torque by term with Newton-Euler's "
                            "(dots); the reduced inertia J and J' over the crank angle.")
             + h.heading("A servo motor and gearbox on the crank")
-            + h.para(f"Every gearbox with every motor: {z['drive']}; motors from {', '.join(z['motors_from'])}, "
-                     f"gearboxes from {z['gearboxes_from']}.", "note")
+            + h.para("A servo motor (through a gearbox) on the crank at its constant speed, without the main shaft's "
+                     "flywheel: the motor delivers every peak of the crank torque. "
+                     f"Every motor of the catalogues ({', '.join(map(str, z['inputs']['catalogue_files'])) or 'the shipped'})"
+                     + (f" with every gearbox of {z['drive']['gearboxes']}" if z["drive"].get("gearboxes") else "")
+                     + f", ranked as `strokeopt size` ranks them ({z['inputs']['choose'].replace('_', ' ')} first).",
+                     "note")
             + h.table(["gearbox", "i", "motor", "peak N m", "RMS N m", "motor rpm", "inertia ratio", "fits",
                        "binding"], cands) + h.para(chosen))
 
