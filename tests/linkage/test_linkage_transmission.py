@@ -248,3 +248,15 @@ def test_the_hybrid_loom_through_solve_is_the_crank_angle_study_s():
     # the crank never stops: speed and acceleration continuous across the cycle's joint
     k = d.stroke.evaluate(np.array([d.stroke.period - 1e-7, 0.0]))
     assert k.v.min() > 5.0 and k.v[0] == pytest.approx(k.v[1], rel=1e-3) and k.a[0] == pytest.approx(k.a[1], abs=5.0)
+
+
+def test_a_turning_crank_s_transmission_index_is_a_check_of_the_design():
+    # a crank that turns passes every pose of the file's linkage: its least transmission index is judged by the
+    # design's checks (a lower bound), not refused at reading (a branch the design keeps to still is, above)
+    from strokeopt.design.solve import transmission_checks
+
+    hybrid = ROOT / "problems" / "loom_beatup_hybrid.toml"
+    (row,) = transmission_checks(load_problem(hybrid, ["transmission.min_transmission_index=0.2"]))
+    assert row["lower"] and row["limit"] == 0.2 and row["value"] == pytest.approx(0.162, abs=5e-4)
+    assert row["name"] == "transmission index (rod_CE, rod_BF, coupler, sley)"
+    assert transmission_checks(load_problem(ROOT / "problems" / "blind_stitch_servo.toml")) == []   # on a branch

@@ -207,6 +207,18 @@ def _load(args, fix_in_design: bool = False):
     return problem
 
 
+def states_design(path) -> bool:
+    """Whether the problem file states a ``[design]`` (``--motor`` then fixes the solve's choice; without one a
+    file may state its motion and nothing to design, a linkage's crank at constant speed); a file that cannot be
+    read: True (the problem reader then says why)."""
+    from ..files.problem_file import read_problem_data
+
+    try:
+        return "design" in read_problem_data(Path(path))
+    except ProblemError:
+        return True
+
+
 def _law_option(text: str) -> tuple[str, dict]:
     """``--law NAME`` or ``--law NAME:PARAM=VALUE,...`` (``s_curve:ramp_share=0.6,constant_speed_share=0.2``)."""
     name, _, rest = text.partition(":")

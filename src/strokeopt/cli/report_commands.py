@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 
 from ..errors import ProblemError
-from .common import _emit, _load, _probe_dir, drive_used, progress_bar
+from .common import _emit, _load, _probe_dir, drive_used, progress_bar, states_design
 from .commands import _sim_options
 from .solve_command import solve_once
 
@@ -58,23 +58,12 @@ def design_of(args, problem, scenes=None):
     return verified, summary, f"read from {args.design}"
 
 
-def _states_design(path) -> bool:
-    """Whether the problem file states a ``[design]`` (``--motor`` then fixes the solve's choice); a file that
-    cannot be read: True (the problem reader says why)."""
-    from ..files.problem_file import read_problem_data
-
-    try:
-        return "design" in read_problem_data(Path(path))
-    except ProblemError:
-        return True
-
-
 def cmd_report(args) -> int:
     from ..report.design_report import gather, write_report
     from ..report.format import to_json
 
     out = _html_path(args.html)
-    problem = _load(args, fix_in_design=_states_design(args.problem))
+    problem = _load(args, fix_in_design=states_design(args.problem))
     if problem.design is None and problem.transmission.analysis(problem) is not None:
         # nothing to design, a transmission with an analysis of its own (a linkage's crank at constant speed)
         from .linkage_command import stated_report

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 
 from ..errors import ProblemError
-from .common import _emit, _load, _plot_path, _write_figure, progress_bar, spm_tag
+from .common import _emit, _load, _plot_path, _write_figure, progress_bar, spm_tag, states_design
 
 
 def add_robust_parser(sub, problem_parent, drive_options, runner_options, plot_option) -> None:
@@ -53,7 +53,7 @@ def cmd_robust(args) -> int:
     from ..io.plain import to_json
     from ..report.robust import plot_robust, robust_text
     from ..io.load_units import error_unit
-    from ..studies.robust import SAMPLES_RANGE, check_distinct, parse_tolerance, robust_study
+    from ..studies.robust import SAMPLES_RANGE, check_distinct, judge_stated, parse_tolerance, robust_study
     from ..studies.runner import study_runner
     from ..studies.verified import solve_verified
 
@@ -62,27 +62,33 @@ def cmd_robust(args) -> int:
     if not args.tolerance:  # before any work
         raise ProblemError("--tolerance", "", "name at least one tolerance, e.g. --tolerance "
                                               "'model.springs.k2.stiffness_N_m=±10%'")
-    problem = _load(args, fix_in_design=True)
+    problem = _load(args, fix_in_design=states_design(args.problem))
     tolerances = [parse_tolerance(t, problem) for t in args.tolerance]
     check_distinct(tolerances)
     runner = study_runner(args.workers, args.scheduler, tasks=samples)  # an unreachable scheduler: before any work
-    if args.design_data is not None:
+    # a machine that states its motion and nothing to design (a linkage's crank at constant speed): the samples
+    # are judged by its transmission's own analysis; else the design's stroke on every sample
+    stated = args.design_data is None and problem.design is None and problem.transmission.analysis(problem) is not None
+    if stated:
+        design = None
+    elif args.design_data is not None:
         design = design_from_data(problem, args.design_data, args.design_stroke)
     else:
         design = solve_verified(problem, compare=False).design
     progress = progress_bar(args, "samples", "sample")
-    report = robust_study(design, tolerances, samples, seed=seed, method=args.method, runner=runner,
-                          progress=progress)
+    report = robust_study(problem if stated else design, tolerances, samples, seed=seed, method=args.method,
+                          runner=runner, progress=progress, judge=judge_stated if stated else None)
     report["runner"] = runner.describe()
     if args.json:
         _emit(to_json(report))
     else:
         print(robust_text(report))
-    contact = getattr(design.settings, "contact", None)
-    scale, unit = error_unit(design.problem.timing.rotary)   # the accuracy in the handover error's unit
-    limits = {f"handover_error_{unit}": None if design.settings is None else design.settings.accuracy * scale,
+    settings = None if stated else design.settings
+    contact = getattr(settings, "contact", None)
+    scale, unit = error_unit(problem.timing.rotary)   # the accuracy in the handover error's unit
+    limits = {f"handover_error_{unit}": None if settings is None else settings.accuracy * scale,
               "impact_velocity_m_s": None if contact is None else contact.impact_velocity_max}
-    _write_figure(lambda p: plot_robust(report, p, limits), _plot_path(args, "robust", spm_tag(design.spm)), args)
+    _write_figure(lambda p: plot_robust(report, p, limits), _plot_path(args, "robust", spm_tag(report["spm"])), args)
     errors = [r for r in report["rows"] if r.get("error")]
     if errors:
         print(f"strokeopt: {len(errors)} samples could not be judged (first: sample {errors[0]['sample']}: "

@@ -283,6 +283,16 @@ def _need(lim, sigma: float) -> float | None:
     return value if math.isfinite(value) else None
 
 
+def transmission_checks(problem) -> list[dict]:
+    """The limits of the transmission's own analysis (a turning crank's linkage: its least transmission index
+    against the file's ``min_transmission_index``, a lower bound) as check rows; none for another transmission."""
+    own = problem.transmission.analysis(problem)
+    if own is None:
+        return []
+    return [{"name": f"transmission index ({', '.join(t['links'])})", "value": float(t["min_index"]),
+             "limit": float(t["limit"]), "unit": "-", "lower": True} for t in own["transmission"]]
+
+
 def _report_checks(best: Outcome) -> tuple[list[dict], list[str]]:
     """Every check with its margin (fine grid), and the constraints active at the solution.
 
@@ -298,6 +308,7 @@ def _report_checks(best: Outcome) -> tuple[list[dict], list[str]]:
     if req.drive is not None:
         checks += [row for lim in DRIVE_LIMITS for row in lim.report(nlp, best)]
     checks += [row for lim in CONTACT_LIMITS for row in lim.report(nlp, best)]
+    checks += transmission_checks(req.problem)
     for c in checks:
         value, limit = float(c["value"]), float(c["limit"])
         if c.pop("lower", False):  # a lower bound (a contact force): the margin is what it has above the limit

@@ -119,3 +119,19 @@ def dynamics_table(dyn, step_deg: float = TABLE_STEP_DEG) -> list[dict]:
              "gravity_torque_N_m": float(dyn.gravity_torque[k]), "process_torque_N_m": float(dyn.load_torque[k]) + 0.0,
              "torque_N_m": float(dyn.torque[k]), "torque_newton_euler_N_m": float(dyn.torque_ne[k])}
             for k in range(0, len(th), step)]
+
+
+def measures(summary: dict, output: str) -> dict:
+    """The scalar results of an analysis a tolerance study scatters (units in the names): the swing and the
+    near-dwells of ``output``, the least transmission index, and with dynamics the crank torque's peak and RMS."""
+    o = next(x for x in summary["outputs"] if x["name"] == output)
+    unit = o["unit"]
+    out = {f"{output}_swing_{unit}": o[f"swing_{unit}"]}
+    for d in o["near_dwells"]:
+        out[f"{output}_dwell_at_{d['at']}_deg"] = float(d["length_deg"])
+    if summary["transmission"]:
+        out["min_transmission_index"] = min(float(t["min_index"]) for t in summary["transmission"])
+    if "dynamics" in summary:
+        t = summary["dynamics"]["torque_N_m"]
+        out.update(crank_torque_peak_N_m=max(abs(t["max"]), abs(t["min"])), crank_torque_rms_N_m=t["rms"])
+    return out

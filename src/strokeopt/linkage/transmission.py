@@ -310,9 +310,10 @@ class LinkageTransmission(Transmission):
         ``with_dynamics`` the crank torque checked by Newton-Euler); None where the crank oscillates on a branch."""
         if self.coordinates != "crank":
             return None
-        from .summary import summarize
+        from .summary import measures, summarize
 
-        return summarize(self.at_constant_speed(problem), with_dynamics=with_dynamics)
+        summary = summarize(self.at_constant_speed(problem), with_dynamics=with_dynamics)
+        return {**summary, "measures": measures(summary, self.output)}
 
     def at_constant_speed(self, problem):
         """The linkage of ``problem`` with its crank at the constant speed of one turn a cam cycle, as the linkage

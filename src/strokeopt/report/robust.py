@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ..io.cycle import cycle_of
 from .format import format_table
 
 #: The result columns of the tables: (key, heading).
@@ -9,11 +10,19 @@ COLUMNS = (("handover_error_mm", "handover mm"), ("handover_error_deg", "handove
            ("impact_velocity_m_s", "impact m/s"), ("peak_torque_N_m", "peak N m"))
 
 
+def columns(report: dict) -> list[tuple[str, str]]:
+    """The result columns of a study: :data:`COLUMNS`, then the results of a machine's own analysis (a linkage's
+    swing, dwells, transmission index, crank torque), headed by their keys in words."""
+    known = dict(COLUMNS)
+    own = [(k, k.replace("_N_m", " N m").replace("_", " ")) for k in report.get("responses", ()) if k not in known]
+    return list(COLUMNS) + own
+
+
 def robust_text(report: dict) -> str:
     """Yield with its interval, failures by criterion, the worst samples and the rank correlations."""
     lo, hi = report["yield_interval"]
-    lines = [f"{report['problem']} at {report['spm']:g} spm: the design's stroke on {report['samples']} sampled "
-             f"machines ({report['method']}, seed {report['seed']})"]
+    lines = [f"{report['problem']} at {cycle_of(report).rate(report['spm'])}: {report.get('judged', 'the design')} on "
+             f"{report['samples']} sampled machines ({report['method']}, seed {report['seed']})"]
     lines += [f"  {t['field']}: {t['lower']:.6g} to {t['upper']:.6g} ({t['distribution']}; nominal {t['nominal']:.6g})"
               for t in report["tolerances"]]
     lines.append(f"yield: {100 * report['yield']:.1f} % meet every limit the problem sets (95 % interval "
@@ -25,12 +34,12 @@ def robust_text(report: dict) -> str:
     worst = [{**{f"p{i}": r.get(f) for i, f in enumerate(fields)}, **r,
               "failed_text": ", ".join(r.get("failed", [])) or "-"} for r in report["worst"]]
     cols = [("sample", "sample")] + [(f"p{i}", f) for i, f in enumerate(fields)] + \
-        [c for c in COLUMNS if any(c[0] in r for r in worst)] + [("failed_text", "fails")]
-    lines += ["", format_table(worst, cols, title="the worst samples (the most limits failed first, then the largest "
-                                                  "handover error)")]
+        [c for c in columns(report) if any(c[0] in r for r in worst)] + [("failed_text", "fails")]
+    lines += ["", format_table(worst, cols, title="the worst samples (the most limits failed first, then "
+                                                  f"{report.get('worst_by', 'the largest handover error')})")]
     sens = [{k: f"{v:+.3f}" if isinstance(v, float) else v for k, v in s.items()}  # one format: correlations
             for s in report["sensitivity"]]
-    cols = [("field", "tolerance")] + [c for c in COLUMNS if any(c[0] in s for s in sens)]
+    cols = [("field", "tolerance")] + [c for c in columns(report) if any(c[0] in s for s in sens)]
     lines += ["", format_table(sens, cols, title="which tolerances matter: Spearman rank correlation with each "
                                                  "result (+1: rises with the part's value, 0: no effect; -: the "
                                                  "result does not vary over the samples beyond the simulation's "
@@ -58,7 +67,8 @@ def plot_robust(report: dict, path, limits: dict | None = None):
     fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), layout="constrained")
     # the two histograms of what the samples have: the handover error and impact velocity a problem judges, else
     # its peak torque (a problem without a handover or a contact model: no empty panels)
-    shown = [q for q in HISTOGRAMS if any(isinstance(r.get(q[0]), (int, float)) for r in rows)][:2]
+    own = [(k, label, "") for k, label in columns(report)[len(COLUMNS):]]   # a machine's own results
+    shown = [q for q in HISTOGRAMS + tuple(own) if any(isinstance(r.get(q[0]), (int, float)) for r in rows)][:2]
     for ax in axes[len(shown):2]:
         ax.set_axis_off()
     for ax, (key, label, unit) in zip(axes[:2], shown):
@@ -76,18 +86,19 @@ def plot_robust(report: dict, path, limits: dict | None = None):
         ax.set_ylabel("samples")
         ax.yaxis.set_major_locator(MaxNLocator(integer=True))  # a count: whole numbers
     sens = report["sensitivity"]
-    keys = [k for k, _ in COLUMNS if any(k in s for s in sens)]
+    heads = dict(columns(report))
+    keys = [k for k in heads if any(k in s for s in sens)]
     width = 0.8 / max(1, len(keys))
     y = np.arange(len(sens))
     for j, key in enumerate(keys):
-        axes[2].barh(y + j * width, [s.get(key) or 0.0 for s in sens], height=width, label=dict(COLUMNS)[key])
+        axes[2].barh(y + j * width, [s.get(key) or 0.0 for s in sens], height=width, label=heads[key])
     axes[2].set_yticks(y + width * (len(keys) - 1) / 2, [s["field"].split(".")[-2] + "." + s["field"].split(".")[-1]
                                                          if s["field"].count(".") else s["field"] for s in sens])
     axes[2].set_xlim(-1, 1)
     axes[2].set_xticks([-1, -0.5, 0, 0.5, 1])  # not crowded at any figure width
     axes[2].set_xlabel("Spearman rank correlation [-]")
-    axes[2].legend(loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=len(keys), fontsize=8)
-    fig.suptitle(f"{report['problem']}, {report['spm']:g} spm: yield {100 * report['yield']:.1f} % of "
+    axes[2].legend(loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=min(3, len(keys)), fontsize=8)
+    fig.suptitle(f"{report['problem']}, {cycle_of(report).rate(report['spm'])}: yield {100 * report['yield']:.1f} % of "
                  f"{report['samples']} samples")
     fig.savefig(path, dpi=120)
     plt.close(fig)

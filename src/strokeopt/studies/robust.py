@@ -166,10 +166,12 @@ def check_distinct(tolerances: list[Tolerance]) -> None:
 
 
 def robust_study(design, tolerances: list[Tolerance], samples: int = 1000, *, seed: int = 0, method: str = "sobol",
-                 runner=None, progress=None) -> dict:
+                 runner=None, progress=None, judge=None) -> dict:
     """The tolerance study of ``design`` (a solved or read-back :class:`~strokeopt.design.result.Design`):
     ``samples`` machines drawn from ``tolerances``, each judged with the design's stroke. Returns ``{"yield",
-    "yield_interval", "samples", "failed_by", "worst", "sensitivity", "rows", "tolerances", ...}``."""
+    "yield_interval", "samples", "failed_by", "worst", "sensitivity", "rows", "tolerances", ...}``. ``judge``:
+    :func:`judge_stated` with a problem for ``design`` (a machine that states its motion, nothing to design:
+    a linkage's crank at constant speed), judged by its transmission's own analysis."""
     if not tolerances:
         raise ProblemError("--tolerance", "", "name at least one tolerance, e.g. "
                                               "--tolerance 'model.springs.k2.stiffness_N_m=±10%'")
@@ -178,21 +180,33 @@ def robust_study(design, tolerances: list[Tolerance], samples: int = 1000, *, se
     if method not in METHODS:
         raise ProblemError("--method", "", f"{method!r} is not one of {', '.join(METHODS)}")
     check_distinct(tolerances)
-    check_applies(tolerances, design)
+    check_applies(tolerances, None if judge is not None else design)
     u = unit_samples(samples, len(tolerances), method, seed)
     items = [(k, tuple(t.value(float(x)) for t, x in zip(tolerances, row))) for k, row in enumerate(u)]
-    outcomes = run_study(_sample_step, items, (design, tuple(tolerances)), runner=runner, progress=progress,
-                         chained=False)
+    outcomes = run_study(_sample_step, items, (design, tuple(tolerances), judge or judge_sample), runner=runner,
+                         progress=progress, chained=False)
     rows = [{"sample": o.item[0], **{t.field: v for t, v in zip(tolerances, o.item[1])},
              **(o.row if o.ok else {"ok": False, "failed": ["error"], "error": o.error})} for o in outcomes]
-    return summarise(rows, tolerances, design, method, seed)
+    problem = design if judge is not None else design.problem
+    return summarise(rows, tolerances, problem, problem.spm if judge is not None else design.spm, method, seed,
+                     stated=judge is not None)
 
 
 def _sample_step(shared, item, warm):
     """One sampled machine: the design's stroke on the problem with the sampled values (a runner step)."""
-    design, tolerances = shared
+    design, tolerances, judge = shared
     _, values = item
-    return judge_sample(design, [f"{t.field}={v!r}" for t, v in zip(tolerances, values)]), None
+    return judge(design, [f"{t.field}={v!r}" for t, v in zip(tolerances, values)]), None
+
+
+def judge_stated(problem, overrides: list[str]) -> dict:
+    """A machine that states its motion (no ``[design]``) with ``overrides``: its transmission's own results
+    (``Transmission.analysis``'s ``measures``: a linkage's swing, near-dwells, least transmission index and crank
+    torque), ``ok`` where the analysis passes its limits."""
+    sampled = problem.with_overrides(overrides)
+    own = sampled.transmission.analysis(sampled, with_dynamics=True)
+    failed = [] if own["status"] == "ok" else ["transmission index"]
+    return {**own["measures"], "ok": not failed, "failed": failed}
 
 
 #: The contact scene of a sample: the default integration without locating each peak force between the output
@@ -266,8 +280,10 @@ def wilson_interval(successes: int, n: int, z: float = 1.959964) -> tuple[float,
 RESPONSES = ("handover_error_mm", "handover_error_deg", "max_lag_mm", "impact_velocity_m_s", "peak_torque_N_m")
 
 
-def summarise(rows: list[dict], tolerances: list[Tolerance], design, method: str, seed: int) -> dict:
-    """Yield with its interval, failures by criterion, the five worst samples, rank correlations."""
+def summarise(rows: list[dict], tolerances: list[Tolerance], problem, spm: float, method: str, seed: int,
+              stated: bool = False) -> dict:
+    """Yield with its interval, failures by criterion, the five worst samples, rank correlations (of
+    :data:`RESPONSES`, and of every result a stated machine's rows have: ``responses``)."""
     from scipy.stats import spearmanr
 
     n = len(rows)
@@ -277,11 +293,15 @@ def summarise(rows: list[dict], tolerances: list[Tolerance], design, method: str
     for r in rows:
         for name in r.get("failed", []):
             failed_by[name] = failed_by.get(name, 0) + 1
+    fields = {t.field for t in tolerances}
+    own = [k for r in rows for k, v in r.items() if k not in fields and k != "sample" and k not in RESPONSES
+           and isinstance(v, float)]
+    responses = RESPONSES + tuple(dict.fromkeys(own))
     sens = []
     for t in tolerances:
         x = np.array([r[t.field] for r in rows], float)
         entry = {"field": t.field}
-        for key in RESPONSES:
+        for key in responses:
             y = np.array([r.get(key, np.nan) for r in rows], float)
             ok = np.isfinite(y)
             # a result that varies by less than the contact simulation resolves (10 x its rtol, relative) over the
@@ -293,10 +313,15 @@ def summarise(rows: list[dict], tolerances: list[Tolerance], design, method: str
         sens.append(entry)
     # the most limits failed, then the largest handover error, then the largest peak torque (where nothing fails
     # and no handover is judged, the samples in index order were listed as the worst)
+    # (a stated machine: the most limits failed, then the least transmission index, its limit's margin)
     worst = sorted(rows, key=lambda r: (len(r.get("failed", [])),
                                         r.get("handover_error_mm", r.get("handover_error_deg", 0.0)),
-                                        r.get("peak_torque_N_m", 0.0)), reverse=True)[:5]
-    return {"status": "ok", "problem": design.problem.name, "spm": design.spm, "samples": n, "method": method,
+                                        r.get("peak_torque_N_m", 0.0), -r.get("min_transmission_index", 0.0)),
+                   reverse=True)[:5]
+    return {"status": "ok", "problem": problem.name, "spm": spm, "cycle": problem.cycle.noun, "samples": n,
+            "method": method, "judged": "the file's motion" if stated else "the design's stroke",
+            "worst_by": "the least transmission index" if stated else "the largest handover error",
+            "responses": [k for k in responses if any(k in r for r in rows)],
             "seed": seed, "tolerances": [{"field": t.field, "nominal": t.nominal, "lower": t.bounds[0],
                                           "upper": t.bounds[1], "distribution": t.distribution} for t in tolerances],
             "yield": good / n if n else 0.0, "yield_interval": [lo, hi], "failed_by": failed_by,
