@@ -212,7 +212,10 @@ def build_parser() -> argparse.ArgumentParser:
                                    "of [design.free]; min_handover_error: the most accurate stroke at this "
                                    "rate (the servo's error term); min_time: the highest stitch rate "
                                    "within every limit (the cycle time free, --spm the start of the search), "
-                                   "with the binding limits named. [design.contact] holds the contact model in the "
+                                   "with the binding limits named; max_duration: the longest time of the move "
+                                   "[design] lengthen names, the moves' times free (their sum the cycle's), the "
+                                   "spans found recorded as --set texts. [design] monotonic = true keeps every "
+                                   "move's direction (a crank that turns one way). [design.contact] holds the contact model in the "
                                    "collocation (keep_closed contacts, min_contact_force_N, impact_velocity_max_m_s); "
                                    "with [scenes], the optimal stroke is re-simulated and judged (a verification "
                                    "block; status 'verification failed', exit 1, names the criterion).",

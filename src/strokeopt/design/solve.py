@@ -81,14 +81,18 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
         teeth, pd, motor = None, None, None
     else:
         best, teeth, notes = choose_parts(req, progress)
-        # the handover accuracy terms at the chosen design (lazy: re-solved with them only if violated)
+        # the handover accuracy terms at the chosen design (lazy: re-solved with them only if violated); at the
+        # spans a max_duration found (its request's problem), which it keeps
         own = drive.own_transmission is not None
         choice = DriveChoice(best.motor, teeth, None if teeth or own else drive.radius_bounds())
-        best = _with_terms(replace(req, choice=choice, spm=best.nlp.request.spm), best)
+        found = best.nlp.request
+        best = _with_terms(replace(req, choice=choice, spm=found.spm, problem=found.problem,
+                                   spans_fixed=found.spans_fixed), best)
         motor = best.motor
         pd = None if best.radius is None else 2 * best.radius
     wall = time.perf_counter() - t_start
     spm = best.nlp.request.spm  # the request's, or the highest rate of min_time
+    problem = best.nlp.request.problem  # the file's, or with the spans a max_duration found (--set texts)
     free = free_report(settings, problem.model, best.free_values) if best.free_values else []
     if free:  # the design's problem: the file's with the values found (recorded as --set texts in design.json)
         problem = problem.with_overrides(free_overrides(problem.model, best.free_values))

@@ -145,7 +145,24 @@ def solve_one(req: SolveRequest) -> Outcome:
     with a free cycle time (``min_time``), re-solved at the rate found until it stays (:func:`solve_free_time`)."""
     if free_time(req.objective):
         return solve_free_time(req)
+    if req.free_spans:
+        return solve_free_spans(req)
     return solve_at_rate(req)
+
+
+def solve_free_spans(req: SolveRequest) -> Outcome:
+    """``max_duration``: one solve with the moves' times free (their sum fixed), then the problem with the spans
+    found (``--set timing.intervals[k].span_deg=...``, recorded in the design) solved again with its spans fixed
+    from that solution: the design at the spans found, every number its own; the outcome's value is the
+    lengthened move's time."""
+    first = solve_at_rate(req)
+    times = [float(first.nlp.value(t, first.x).item()) for t in first.nlp.graph.T]
+    period = req.period   # a cam revolution: 360 deg of span
+    problem = req.problem.with_overrides([f"timing.intervals[{mv.interval}].span_deg={360.0 * t / period!r}"
+                                          for mv, t in zip(req.moves, times)])
+    final = solve_at_rate(replace(req, problem=problem, spans_fixed=True, warm=first.sols, mesh=first.nlp.request.mesh,
+                                  pin_times=None))
+    return replace(final, solve_time=first.solve_time + final.solve_time, iterations=first.iterations + final.iterations)
 
 
 def solve_free_time(req: SolveRequest) -> Outcome:

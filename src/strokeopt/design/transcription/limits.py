@@ -126,6 +126,8 @@ class JerkBound(Limit):
         settings = g.request.settings
         if not settings.jerk_max_from_law or settings.jerk_law_spm:
             jb = jb * g.time_scale**3
+        if g.request.free_spans:  # the move's time a variable (max_duration): the bound in m/s^3 at its time
+            jb = jb * (g.T[k] / b.param(f"time of move {mv.index}", lambda r, k=k: r.moves[k].duration))**3
         hull = x.hull("j") / jb  # Bernstein coefficients: bounds the jerk everywhere, not only at nodes
         lim = LimitGroup(f"jerk bound move {mv.index}", "jerk bound", mv.jerk_bound, "m/s^3",
                          lambda sig, jb=mv.jerk_bound: jb * (1 + sig), mv.index)

@@ -196,6 +196,11 @@ def add_moves(g: Graph) -> None:
                              TIME_SCALE_BOUNDS[1], 1.0)
     g.T = [b.param(f"T{mv.index}", lambda r, k=k: r.moves[k].duration) * g.time_scale
            for k, mv in enumerate(moves)]
+    if req.free_spans:  # max_duration: every move's time a variable, their sum the request's (the dwells keep theirs)
+        g.T = [b.var(f"T{mv.index} free", (1, 1), lambda r, k=k: max(0.05 * r.moves[k].duration, 1e-4),
+                     lambda r: r.period, lambda r, k=k: r.moves[k].duration) for k, mv in enumerate(moves)]
+        b.constrain("moves' times", sum(g.T) - b.param("moves' time", lambda r: sum(m.duration for m in r.moves)),
+                    0.0, 0.0)
     for k, mv in enumerate(moves):
         s_lb, s_ub = np.full(n + 1, -np.inf), np.full(n + 1, np.inf)
         s_lb[0] = s_ub[0] = 0.0
@@ -216,6 +221,8 @@ def add_moves(g: Graph) -> None:
         x = MoveVariables(mesh, S, V, a0, Acol)
         g.vars.append(x)
         b.constrain(f"move {mv.index} collocation", x.defects(), 0.0, 0.0)
+        if settings.monotonic:  # the unit speed (the stroke's direction) never below zero, everywhere
+            b.constrain(f"move {mv.index} direction", x.hull("v"), 0.0, np.inf)
         ends = [e for e, speed in ((x.at([0.0], "j")[0, 0], mv.start_speed), (x.at([1.0], "j")[-1, 0], mv.end_speed))
                 if not speed]
         if settings.rest_order >= 3 and ends:
@@ -267,7 +274,7 @@ def structure_key(req: SolveRequest) -> tuple:
     """What fixes the NLP's structure besides the problem: solves that share it share one built NLP and
     solver (their numbers differ). The error terms enter by type and parameters (they compare by value)."""
     choice = req.choice
-    return (repr(req.settings), req.mesh, req.objective, req.relaxed, tuple(req.error_terms),
+    return (repr(req.settings), req.mesh, req.objective, req.free_spans, req.relaxed, tuple(req.error_terms),
             req.enforce_accuracy, tuple((mv.jerk_bound is None, mv.start_speed, mv.end_speed) for mv in req.moves),
             None if choice is None else tuple(m.name for m in choice.candidates),
             req.drive is not None and req.drive.belt is None)

@@ -117,6 +117,27 @@ def min_time(g):
     return Cost(g.time_scale + _smoothing(g), "s", lambda f, r: f * 60.0 / r.spm, g.time_scale)
 
 
+def max_duration(g):
+    """The longest time of the move ``[design] lengthen`` names, the moves' times free with their sum fixed
+    (``free_spans``: the dwells keep theirs): the NLP minimises its time's negative relative to the request's.
+    Its value is the time [s]; :func:`~.refine.solve_free_spans` solves again at the spans found."""
+    k = lengthened(g.request)
+    nominal = g.built.param("lengthened time", lambda r, k=k: r.moves[k].duration)
+    # the solve at the spans found keeps the first solve's stroke: nothing to minimise there (no smoothing either)
+    f = -g.T[k] / nominal + (_smoothing(g) if g.request.free_spans else 0)
+    return Cost(f, "s", lambda f, r, k=k: -f * r.moves[k].duration, -g.T[k] / nominal)
+
+
+def lengthened(req) -> int:
+    """The position among the request's moves of the move ``[design] lengthen`` names (a ProblemError naming the
+    field where no move has that name)."""
+    names = [mv.name for mv in req.moves]
+    if req.settings.lengthen not in names:
+        raise ProblemError(str(req.problem.file), "design.lengthen", f"{req.settings.lengthen!r} is no move of "
+                                                                     f"[timing]: {', '.join(names)}")
+    return names.index(req.settings.lengthen)
+
+
 def min_handover_error(g):
     """The most accurate stroke at this rate: the largest handover error of the design's terms over the checked
     instants (:class:`~.limits.HandoverAccuracy`, epigraph form), relative to ``[design] handover_accuracy_mm``."""
@@ -172,6 +193,8 @@ class Objective:
     torque_squared: bool = False
     #: it holds the jerk continuous between mesh intervals (its integrand is the jerk's derivative)
     jerk_continuous: bool = False
+    #: the moves' times are decision variables (their sum fixed): ``max_duration``
+    free_spans: bool = False
 
 
 REGISTRY = {o.name: o for o in (
@@ -196,6 +219,9 @@ REGISTRY = {o.name: o for o in (
               needs_terms=True),
     Objective("min_time", "shortest stitch period (highest stitch rate) within every limit of the design, the "
               "interval times fixed fractions of the cycle", True, min_time, free_time=True, quantity="stitch period"),
+    Objective("max_duration", "longest time of the move [design] lengthen names within every limit of the design, "
+              "the other moves' times giving it theirs (the dwells and the cycle time fixed)", False, max_duration,
+              free_spans=True, quantity="time of the lengthened move"),
 )}
 #: Every objective, with what it minimises.
 OBJECTIVES = {name: o.description for name, o in REGISTRY.items()}

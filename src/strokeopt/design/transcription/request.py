@@ -276,7 +276,16 @@ class SolveRequest:
     error_terms: tuple = ()
     pin_times: dict | None = None
     rate_cap: bool = False
+    #: with ``max_duration``: the moves' times fixed at the problem's spans (the solve again at the spans found)
+    spans_fixed: bool = False
     cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    @property
+    def free_spans(self) -> bool:
+        """Whether the moves' times are decision variables (``max_duration``, before its spans are fixed)."""
+        from .objectives import objective_of
+
+        return objective_of(self.objective).free_spans and not self.spans_fixed
 
     @property
     def terms_minimised(self) -> bool:

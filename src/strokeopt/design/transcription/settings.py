@@ -91,6 +91,12 @@ class DesignSettings:
     prune_catalogue: bool = True
     #: ``cam_tables``: the controller formats ``solve --out`` writes beside design.json (files/cam_formats.py)
     cam_tables: tuple = ()
+    #: ``lengthen``: the move whose time ``max_duration`` makes as long as the limits allow (the other moves'
+    #: times give it theirs; the dwells keep theirs)
+    lengthen: str | None = None
+    #: ``monotonic``: every move keeps its direction (its speed never changes sign: a crank that turns one way, a
+    #: follower that does not turn back inside a move), held everywhere (Bernstein hull of the speed)
+    monotonic: bool = False
 
     @property
     def mesh(self) -> Mesh:
@@ -185,10 +191,16 @@ def parse_design(f, *, file: str = "", rotary: bool = False) -> DesignSettings:
     pull_out = f.boolean("enforce_pull_out", True)
     prune_catalogue = f.boolean("prune_catalogue", True)
     cam_tables = _read_cam_tables(f)
+    lengthen = f.string("lengthen", None)   # a move's name: the problem reader checks it against [timing]
+    monotonic = f.boolean("monotonic", False)
+    if (lengthen is None) == (objective == "max_duration"):
+        raise f.error("lengthen" if lengthen is not None else "objective",
+                      "names the move objective = \"max_duration\" makes as long as the limits allow: give both")
     f.finish()
     return DesignSettings(objective, n, d, rest, jerk, from_law, accuracy, motor_choice, pulley, zmin, zmax,
                           check_points, check_tol, refinements, pulley_inertia, options, contact, free, pull_out,
-                          reserve, law_spm, prune_catalogue=prune_catalogue, cam_tables=cam_tables)
+                          reserve, law_spm, prune_catalogue=prune_catalogue, cam_tables=cam_tables, lengthen=lengthen,
+                          monotonic=monotonic)
 
 
 #: The cam-table formats of controllers strokeopt writes (files/cam_formats.py holds what each is).
