@@ -91,7 +91,9 @@ def cmd_size(args) -> int:
 
     problem = _load(args)
     if problem.drive is None:
-        raise ProblemError(args.problem, "drive", "the problem has no [drive] section (motor, moving_mass_kg, ...)")
+        raise ProblemError(args.problem, "drive", "the problem has no [drive] section to size from (the motor or "
+                                                  "its catalogues, the limits, the load's moving mass or inertia "
+                                                  "where the transmission's own bodies do not carry it)")
     if args.continuous_radius and not hasattr(problem.transmission, "radius"):
         raise ProblemError("--continuous-radius", "", f"needs a belt pulley; the problem's transmission is a "
                                                       f"{problem.transmission.name}")

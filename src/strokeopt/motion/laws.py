@@ -265,6 +265,8 @@ class MotionLaw:
         if self._spec.table:
             return f"points ({len(self.params['points_x'])} points, rest order {self.params['rest_order']:g})"
         p = ", ".join(f"{k} = {v:g}" for k, v in self.params.items())
+        if self.name == "poly5_speeds" and self.params.get("start_speed") == self.params.get("end_speed") == 1:
+            return f"constant speed ({self.name}, {p})"   # a move at its mean speed throughout: a turning crank
         return f"{self.name} ({p})" if p else self.name
 
     @property

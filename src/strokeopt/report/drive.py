@@ -61,10 +61,13 @@ def sizing_text(sizing, report: dict, explain: bool = False) -> str:
                            f"beyond {f['contact_position_deg']:g} deg, pushing "
                            f"towards {direction_word(f['direction'], True)} angles)" for f in inp["load_forces"]) or "none"
         load = f"load: moving inertia {inp['moving_inertia_kg_m2']:g} kg m^2 (rotary, gravity off), load torques: {forces}"
-        if "transmission_inertia_kg_m2" in inp:   # a linkage's links carry the load
+        if "transmission_inertia_kg_m2" in inp:   # a linkage's links carry the load, their gravity its own
             lo, hi = inp["transmission_inertia_kg_m2"]
-            load += (f"; the transmission's own bodies: {lo:.4g} to {hi:.4g} kg m^2 on the motor shaft over the "
-                     "stroke, with their gravity and loads")
+            geared = (report.get("drive") or {}).get("gearboxes")
+            load = (f"load: the transmission's own bodies, {lo:.4g} to {hi:.4g} kg m^2 on "
+                    + ("its input shaft (before the gearbox)" if geared else "the motor shaft")
+                    + f" over the stroke, with their gravity and loads; added to the output: "
+                    f"{inp['moving_inertia_kg_m2']:g} kg m^2, load torques: {forces}")
     else:
         forces = "; ".join(f"{f['name']} ({f['kind']}, {f['force_N']:g} N + {f['stiffness_N_m']:g} N/m "
                            f"beyond {f['contact_position_mm']:g} mm, pushing {f['direction']})"

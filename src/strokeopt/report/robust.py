@@ -68,7 +68,11 @@ def plot_robust(report: dict, path, limits: dict | None = None):
     # the two histograms of what the samples have: the handover error and impact velocity a problem judges, else
     # its peak torque (a problem without a handover or a contact model: no empty panels)
     own = [(k, label, "") for k, label in columns(report)[len(COLUMNS):]]   # a machine's own results
-    shown = [q for q in HISTOGRAMS + tuple(own) if any(isinstance(r.get(q[0]), (int, float)) for r in rows)][:2]
+    def varies(key):   # a result the same in every sample (a dwell counted in whole steps) gets no panel
+        values = [r[key] for r in rows if isinstance(r.get(key), (int, float))]
+        return len(values) > 0 and (key in dict(COLUMNS) or max(values) > min(values))
+
+    shown = [q for q in HISTOGRAMS + tuple(own) if varies(q[0])][:2]
     for ax in axes[len(shown):2]:
         ax.set_axis_off()
     for ax, (key, label, unit) in zip(axes[:2], shown):

@@ -295,7 +295,7 @@ def summarise(rows: list[dict], tolerances: list[Tolerance], problem, spm: float
             failed_by[name] = failed_by.get(name, 0) + 1
     fields = {t.field for t in tolerances}
     own = [k for r in rows for k, v in r.items() if k not in fields and k != "sample" and k not in RESPONSES
-           and isinstance(v, float)]
+           and isinstance(v, float)] if stated else []   # a stated machine's own results (a linkage's measures)
     responses = RESPONSES + tuple(dict.fromkeys(own))
     sens = []
     for t in tolerances:
