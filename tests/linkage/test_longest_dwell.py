@@ -45,7 +45,7 @@ def test_the_longest_rear_dwell_within_the_constant_speed_peak_torque():
     assert np.abs(torque).max() <= 19.31 * (1 + d.settings.check_tolerance)
     assert k.v.min() >= -1e-6 * lp.omega   # monotonic: the crank never turns back
     # the crank-speed study asked the same (the rotor on the crank, the motor's 3000 rpm = 15 x 200 rpm, the crank
-    # not stopping): it finds 180.7 ms with 360 steps a turn and 171.3 ms with 720 (the problem is not convex: the
+    # not stopping): it finds 180.9 ms with 360 steps a turn and 171.1 ms with 720 (the problem is not convex: the
     # time in a window of a function convex in the squared speed); the design holds at least its best
     study = hybrid_crank_speed(lp, peak_torque_max_N_m=19.31, speed_range=(0.001, 15.0), rotor_inertia=1e-3)
     assert d.objective_value >= 0.99 * study.dwell_time_s
