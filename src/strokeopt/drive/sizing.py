@@ -121,21 +121,15 @@ class FixedTransmission:
 
 
 @dataclass(frozen=True)
-class GearboxChoice:
+class GearboxChoice(FixedTransmission):
     """The problem's transmission through one gearbox of the catalogue (``[drive] gearboxes``): a "pulley" a
     sizing tries, with the gearbox's own checks (its output torques)."""
 
-    tr: object
-    entry: object  # gearboxes.GearboxEntry
-    teeth = None
-    pitch_diameter = None
+    entry: object = None  # gearboxes.GearboxEntry
 
     @property
     def name(self) -> str:
         return self.entry.name
-
-    def transmission(self):
-        return self.tr
 
     def checks(self, base) -> list[Check]:
         """The gearbox's output torque over the cycle (the motor-side torque without the rotor's and the

@@ -194,9 +194,10 @@ def add_moves(g: Graph) -> None:
     if free_time(req.objective):  # every duration is the cycle time times its fixed fraction of the cycle
         g.time_scale = b.var(TIME_SCALE, (1, 1), lambda r: 1.0 if r.rate_cap else TIME_SCALE_BOUNDS[0],
                              TIME_SCALE_BOUNDS[1], 1.0)
-    g.T = [b.param(f"T{mv.index}", lambda r, k=k: r.moves[k].duration) * g.time_scale
-           for k, mv in enumerate(moves)]
-    if req.free_spans:  # max_duration: every move's time a variable, their sum the request's (the dwells keep theirs)
+    if not req.free_spans:
+        g.T = [b.param(f"T{mv.index}", lambda r, k=k: r.moves[k].duration) * g.time_scale
+               for k, mv in enumerate(moves)]
+    else:  # max_duration: every move's time a variable, their sum the request's (the dwells keep theirs)
         g.T = [b.var(f"T{mv.index} free", (1, 1), lambda r, k=k: max(0.05 * r.moves[k].duration, 1e-4),
                      lambda r: r.period, lambda r, k=k: r.moves[k].duration) for k, mv in enumerate(moves)]
         b.constrain("moves' times", sum(g.T) - b.param("moves' time", lambda r: sum(m.duration for m in r.moves)),
