@@ -65,7 +65,8 @@ from .studies.runner import StudyRunner
 from .motion.stroke import Kinematics, Piece, StrokeFunction
 from .motion.timing import Interval, TimingDiagram
 from .drive.crank_slider import CrankSlider
-from .drive.transmission import BeltPulley, Gearbox, ScrewLever, Transmission, gt3_pitch_diameter
+from .drive.screw_lever import ScrewLever
+from .drive.transmission import BeltPulley, Gearbox, Transmission, gt3_pitch_diameter
 from .transmissions import TRANSMISSIONS
 
 __all__ = [

@@ -11,7 +11,8 @@ lists (drive's transmissions, the linkage's), so none of them imports another fo
 from __future__ import annotations
 
 from .drive.crank_slider import CrankSlider
-from .drive.transmission import BeltPulley, Gearbox, ScrewLever, Transmission
+from .drive.screw_lever import ScrewLever
+from .drive.transmission import BeltPulley, Gearbox, Transmission
 from .linkage.transmission import LinkageTransmission
 
 #: ``[transmission] type`` -> the class that reads it (the first is the default).

@@ -93,19 +93,73 @@ def test_unknown_type_lists_the_registered_ones():
     assert all(name in err.value.message for name in TRANSMISSIONS)
 
 
+def test_a_free_radius_is_the_same_crank_as_a_stated_one():
+    """The NLP's crank (its radius a CasADi symbol, ``with_free``) gives the motor motion of a crank built with
+    that radius; its reach rows are >= 0 exactly where the reader's range check accepts the radius."""
+    import casadi as ca
+
+    tr = CrankSlider(0.020, 0.08, 0.43e-4, dead_centre=-3e-4, sense=1.0)
+    r = ca.MX.sym("r")
+    free = tr.with_free({"crank_radius_mm": r})
+    x, v, a = np.array([0.0, 0.012, 0.034]), np.array([0.5, -1.5, 2.0]), np.array([40.0, -300.0, 120.0])
+    symbolic = ca.Function("kin", [r], list(free.motor_kinematics(*(ca.MX(ca.DM(y)) for y in (x, v, a)))))
+    rows = ca.Function("reach", [r], [ca.vertcat(*free.reach_rows(0.0, 0.035))])
+    for radius in (17.0, 17.6, 18.0, 20.0, 26.0):
+        stated = CrankSlider(radius * 1e-3, 0.08, 0.43e-4, dead_centre=-3e-4, sense=1.0)
+        ok = stated.range_error(0.0, 0.035) is None
+        assert (float(np.min(rows(radius).full())) >= 0) == ok, radius
+        if ok:
+            for got, want in zip(symbolic(radius), stated.motor_kinematics(x, v, a)):
+                assert np.ravel(got.full()) == pytest.approx(np.ravel(want), rel=1e-12)
+    assert free.inertia == tr.inertia and tr.r == 0.020          # the stated crank is left as it was
+
+
+@pytest.mark.parametrize("override, field, words", [
+    ("design.free.transmission.rod_length_mm=[70, 90]", "design.free.transmission.rod_length_mm",
+     "no field 'rod_length_mm' a design may free; it offers: crank_radius_mm"),
+    ("design.free.transmission.crank_radius_mm=[18, 80]", "design.free.transmission.crank_radius_mm",
+     "shorter than the rod (80 mm)"),
+    ("design.free.transmission.crank_radius_mm=[20, 18]", "design.free.transmission.crank_radius_mm",
+     "0 < lower <= upper"),
+    ("design.free.transmission.crank_radius_mm=20", "design.free.transmission.crank_radius_mm",
+     "needs bounds [lower, upper]"),
+])
+def test_bad_free_crank_fields_name_the_field(override, field, words):
+    with pytest.raises(ProblemError) as err:
+        load_problem(CRANK_FILE, [override])
+    assert err.value.field == field and words in err.value.message
+
+
+def test_a_belt_has_no_transmission_field_to_free():
+    with pytest.raises(ProblemError) as err:
+        load_problem(PROBLEMS / "deco2000_needle_bar.toml", ["design.free.transmission.crank_radius_mm=[18, 30]"])
+    assert err.value.field == "design.free.transmission.crank_radius_mm"
+    assert "design] pulley" in err.value.message
+
+
 @pytest.mark.slow
 def test_design_through_the_crank_holds_the_torque_of_the_textbook_crank():
-    """The reference stroke designed through the crank (motor fixed): its peak torque, re-derived here from the
-    stroke with the textbook transfer functions (not the transmission's AD), is the design's checked peak, and
-    the crank's varying ratio costs torque against the belt's 0.8596 N m (docs/sources.md)."""
+    """The reference stroke designed through the crank (motor fixed), its crank radius chosen with it: its peak
+    torque, re-derived here from the stroke with the textbook transfer functions at the radius found (not the
+    transmission's AD), is the design's checked peak; the radius found lies inside its bounds, the design's
+    problem carries it, and it beats the least radius the bar's travel allows; the crank's varying ratio
+    costs torque against the belt's 0.8596 N m (docs/sources.md)."""
     from strokeopt import solve_design
     from strokeopt.drive.load import G
 
     problem = load_problem(CRANK_FILE, ['design.motor_choice="fixed"'])
     design = solve_design(problem)
     assert design.status == "optimal" and design.motor == "055U2B30"
+    (row,) = design.free_parameters
+    assert row["parameter"] == "transmission.crank_radius_mm" and row["at_bound"] is None
+    assert 18.0 < row["value"] < 30.0
+    assert design.problem.transmission.r == pytest.approx(row["value"] * 1e-3, rel=1e-12)
+    assert problem.transmission.r == 0.020                        # the file's, the solve's start
+    least = solve_design(load_problem(CRANK_FILE, ['design.motor_choice="fixed"',
+                                                   "design.free.transmission.crank_radius_mm=[18, 18]"]))
+    assert design.objective_value < least.objective_value * 0.95   # the least radius costs >= 5 % more torque
     k = design.stroke.sample(20001)
-    tr, load = problem.transmission, problem.drive.load
+    tr, load = design.problem.transmission, problem.drive.load
     phi = tr.motor_angle(k.s)
     _, mu, nu = _textbook(tr.r, tr.l, phi)
     omega = k.v / mu

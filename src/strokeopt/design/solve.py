@@ -145,7 +145,7 @@ def _settings_notes(settings: DesignSettings, free: list, nlp, drive) -> list[st
     """The notes that say what the settings did: free parameters found, the jerk bound, the torque reserve."""
     notes = []
     for row in free:
-        notes.append(f"free model parameter {row['parameter']} = {row['value']:.5g} (bounds {row['lower']:g} "
+        notes.append(f"free parameter {row['parameter']} = {row['value']:.5g} (bounds {row['lower']:g} "
                      f"to {row['upper']:g})" + (f": at its {row['at_bound']} bound" if row["at_bound"] else ""))
     if settings.jerk_max_from_law and settings.jerk_law_spm:
         notes.append(f"jerk bound: the peak jerk of each move's law at {settings.jerk_law_spm:g} spm ([design] "

@@ -66,6 +66,28 @@ class CrankSlider(Transmission):
         fields.finish()
         return tr
 
+    #: the crank radius a design may choose (``[design.free.transmission] crank_radius_mm = [lower, upper]``); the
+    #: rod's length and the crank's inertia stay as stated
+    free_fields = {"crank_radius_mm": ("r", 1e-3)}
+
+    def free_error(self, key: str, lower: float, upper: float) -> str | None:
+        if not (1.0 <= lower and upper * 1e-3 < self.l):
+            return (f"bounds {lower:g}..{upper:g} mm: a crank radius of at least 1 mm and shorter than the rod "
+                    f"({self.l * 1e3:g} mm)")
+        return None
+
+    def reach_rows(self, x_min, x_max) -> list:
+        """The travel from the outer dead centre of ``x_min`` and ``x_max`` between the crank's travel at
+        :data:`DEAD_CENTRE_MARGIN_DEG` and at 180 deg less it, in mm (what :meth:`range_error` checks of a
+        fixed radius)."""
+        margin = math.radians(DEAD_CENTRE_MARGIN_DEG)
+        near, far = self.travel(margin), self.travel(math.pi - margin)
+        rows = []
+        for x in (x_min, x_max):
+            u = self.sense * (x - self.dead_centre)
+            rows += [(u - near) * 1e3, (far - u) * 1e3]
+        return rows
+
     def facts(self):
         return [("crank radius [mm]", self.r * 1e3), ("connecting rod length [mm]", self.l * 1e3)]
 
@@ -78,7 +100,8 @@ class CrankSlider(Transmission):
 
     def inverse_position(self, x):
         d = self.r + self.l - self.sense * (x - self.dead_centre)  # crank centre to the rod's end on the slider
-        return ca.acos((d**2 + self.r**2 - self.l**2) / (2 * d * self.r))
+        # held inside [-1, 1]: a free radius may leave a position out of reach between iterates (reach_rows)
+        return ca.acos(ca.fmin(ca.fmax((d**2 + self.r**2 - self.l**2) / (2 * d * self.r), -1.0), 1.0))
 
     def range_error(self, x_min: float, x_max: float) -> str | None:
         """Every load position inside the travel, the crank at least :data:`DEAD_CENTRE_MARGIN_DEG` from a dead

@@ -10,6 +10,7 @@ the design's pulley search all use it. load.py turns a load motion into motor to
 
 from __future__ import annotations
 
+import copy
 import math
 
 import casadi as ca
@@ -54,20 +55,57 @@ class Transmission:
         """Motor angle [rad] for the load position ``x`` [m], with CasADi operations."""
         raise NotImplementedError(f"{type(self).__name__} has no inverse")
 
+    #: the ``[transmission]`` fields a design may free (``[design.free.transmission]``, design/free.py): file field ->
+    #: (attribute, factor from the file's unit to SI); a constant-ratio belt's radius is ``design.pulley``'s
+    free_fields: dict = {}
+
+    def free_error(self, key: str, lower: float, upper: float) -> str | None:
+        """Why the bounds ``lower..upper`` (the file's unit) of the free field ``key`` do not fit, or None."""
+        return None
+
+    def with_free(self, values: dict) -> "Transmission":
+        """The same transmission with the fields of ``values`` (file field -> value in the file's unit: a number, or a
+        CasADi expression for a design variable) in place of its own; its functions of the motor angle built again."""
+        return self.replaced(**{self.free_fields[key][0]: value * self.free_fields[key][1] for key, value in values.items()})
+
+    def replaced(self, **attributes) -> "Transmission":
+        """A copy with ``attributes`` set, its functions of the motor angle built again for them."""
+        tr = copy.copy(self)
+        for cached in ("_fns", "_inv", "_stage_fns"):
+            tr.__dict__.pop(cached, None)
+        tr.__dict__.update(attributes)
+        return tr
+
+    def reach_rows(self, x_min, x_max) -> list:
+        """Rows that must be >= 0 (CasADi alike) for the load positions ``x_min..x_max`` [m] to lie in the range of a
+        transmission with free fields (:meth:`range_error` says it of a fixed one when the file is read)."""
+        return []
+
+    def _compiled(self, cache: str, name: str, inputs: int, outputs):
+        """The CasADi function ``outputs(tr, *x)`` of ``inputs`` scalar symbols ``x``, built once (``cache``). Where an
+        attribute is a CasADi expression (a free field, :meth:`with_free`) the function is built over a symbol
+        standing for it and called with the expression."""
+        if cache not in self.__dict__:
+            free = {k: v for k, v in vars(self).items() if isinstance(v, (ca.SX, ca.MX))}
+            proto = copy.copy(self)
+            stand = {k: ca.SX.sym(k) for k in free}
+            for k, sym in stand.items():
+                setattr(proto, k, sym)
+            args = [ca.SX.sym(f"x{i}") for i in range(inputs)]
+            fn = ca.Function(name, args + list(stand.values()), outputs(proto, *args))
+            values = tuple(free.values())
+            self.__dict__[cache] = fn if not free else (lambda *a: fn(*a, *values))
+        return self.__dict__[cache]
+
     def _functions(self):
-        if not hasattr(self, "_fns"):
-            phi = ca.SX.sym("phi")
-            x = self.position(phi)
+        def transfer(tr, phi):
+            x = tr.position(phi)
             mu = ca.jacobian(x, phi)
-            nu = ca.jacobian(mu, phi)
-            self._fns = ca.Function(f"{self.name}_transfer", [phi], [x, mu, nu], ["phi"], ["x", "mu", "nu"])
-        return self._fns
+            return [x, mu, ca.jacobian(mu, phi)]
+        return self._compiled("_fns", f"{self.name}_transfer", 1, transfer)
 
     def _inverse_function(self):
-        if not hasattr(self, "_inv"):
-            x = ca.SX.sym("x")
-            self._inv = ca.Function(f"{self.name}_inverse", [x], [self.inverse_position(x)], ["x"], ["phi"])
-        return self._inv
+        return self._compiled("_inv", f"{self.name}_inverse", 1, lambda tr, x: [tr.inverse_position(x)])
 
     def transfer(self, phi):
         """Numeric ``(x, mu, nu)`` at motor angles ``phi`` [rad]."""
@@ -115,15 +153,14 @@ class Transmission:
 
     def _stage_functions(self):
         """``phi -> [q, dq/dphi, d2q/dphi2, d3q/dphi3]`` of every stage (AD), and of the load last."""
-        if not hasattr(self, "_stage_fns"):
-            phi = ca.SX.sym("phi")
+        def stages(tr, phi):
             outs = []
-            for _, q, _ in self.stages(phi) + [("", self.position(phi), "")]:
+            for _, q, _ in tr.stages(phi) + [("", tr.position(phi), "")]:
                 d1 = ca.jacobian(q, phi)
                 d2 = ca.jacobian(d1, phi)
                 outs += [q, d1, d2, ca.jacobian(d2, phi)]
-            self._stage_fns = ca.Function(f"{self.name}_stages", [phi], outs)
-        return self._stage_fns
+            return outs
+        return self._compiled("_stage_fns", f"{self.name}_stages", 1, stages)
 
     def stage_transfer(self, phi) -> dict:
         """``{stage: (dq/dphi, d2q/dphi2)}`` at motor angles ``phi``: numpy for numbers, CasADi for symbols."""
@@ -300,110 +337,6 @@ class BeltPulley(Transmission):
         return f"BeltPulley(pitch_diameter={self.pitch_diameter * 1e3:.3f} mm)"
 
 
-class ScrewLever(Transmission):
-    """Screw and lever of the knitting-machine stitch-cam drive (sources B).
-
-    The motor turns a screw of lead ``s``; the nut moves ``x2 = s/(2 pi) phi``
-    and tilts a lever, ``phi4 = atan(x2/R0)``; the lever's other arm, at
-    ``offset`` [rad] to the first, moves the sleeve ``x6 = R0P tan(phi4 + offset)``
-    (minus its value at phi = 0, so x6(0) = 0). Each stage is written once
-    (:meth:`nut_position`, :meth:`lever_angle`, :meth:`sleeve_position`): the position function,
-    the stages' kinematics and the elastic model's couplings all use them. ``inertia`` is the
-    screw's [kg m^2].
-    """
-
-    name = "screw_lever"
-    label = "screw and lever"
-
-    @classmethod
-    def read(cls, trans, timing) -> "ScrewLever":
-        """``[transmission]`` of a screw and lever: ``lead_mm``, ``lever_arm_mm`` R0, ``sleeve_arm_mm`` R0P,
-        ``lever_offset_deg``, ``screw_inertia_kg_cm2`` and the thread (``screw_diameter_mm``,
-        ``thread_friction``, ``thread_angle_deg``); the strokes of ``timing`` must stay within the lever's
-        range."""
-        # leads of 0.1 mm (a fine adjusting screw) to 100 mm (a steep ball screw); lever arms of 1 mm to 1 m;
-        # the arms' offset within the lever's own range (LEVER_LIMIT_DEG); a screw of up to 1e4 kg cm^2 (a
-        # 100 mm steel shaft a metre long is 8e3 kg cm^2)
-        diameter = trans.number("screw_diameter_mm", None, min=1.0, max=100.0)
-        tr = cls(trans.number("lead_mm", min=0.1, max=100.0) * 1e-3,
-                 trans.number("lever_arm_mm", min=1.0, max=1e3) * 1e-3,
-                 trans.number("sleeve_arm_mm", min=1.0, max=1e3) * 1e-3,
-                 math.radians(trans.number("lever_offset_deg", 0.0, min=-80.0, max=80.0)),
-                 trans.number("screw_inertia_kg_cm2", 0.0, min=0.0, max=1e4) * 1e-4,
-                 # the screw torque from the nut force (contact/chain.py): pitch diameters 1-100 mm, flank
-                 # friction 0.01 (ball screw) to 1, flank angles 0 (square) to 90 deg (metric 60, Tr 30)
-                 None if diameter is None else diameter * 1e-3,
-                 trans.number("thread_friction", 0.15, min=0.01, max=1.0),
-                 math.radians(trans.number("thread_angle_deg", 30.0, min=0.0, max=90.0)))
-        if tr.screw_diameter is not None:  # a screw the motor cannot drive: F d2/2 tan(lambda + rho') turns over
-            lam = math.degrees(math.atan(tr.lead / (math.pi * tr.screw_diameter)))
-            rho = math.degrees(math.atan(tr.thread_friction / math.cos(tr.thread_angle / 2)))
-            if lam + rho >= SCREW_ANGLE_MAX_DEG:
-                raise trans.error("lead_mm", f"{tr.lead * 1e3:g} mm on a {tr.screw_diameter * 1e3:g} mm screw is a "
-                                             f"lead angle of {lam:.1f} deg; with the flanks' friction angle {rho:.1f} "
-                                             f"deg (thread_friction {tr.thread_friction:g}) they add to "
-                                             f"{lam + rho:.1f} deg, at or above {SCREW_ANGLE_MAX_DEG:g} deg: no torque "
-                                             "drives the nut (a shorter lead, a larger diameter or less friction)")
-        check_reach(tr, trans, "sleeve_arm_mm", timing, "a longer arm or a shorter stroke")
-        tr.efficiency = read_efficiency(trans)
-        trans.finish()
-        return tr
-
-    def __init__(self, lead: float, R0: float, R0P: float, offset: float = 0.0, inertia: float = 0.0,
-                 screw_diameter: float | None = None, thread_friction: float = 0.15, thread_angle: float = math.radians(30)):
-        if not (lead > 0 and R0 > 0 and R0P > 0):
-            raise ValueError("lead and lever arms must be positive")
-        self.lead, self.R0, self.R0P, self.offset, self.inertia = (float(lead), float(R0), float(R0P),
-                                                                   float(offset), float(inertia))
-        self.screw_diameter, self.thread_friction, self.thread_angle = screw_diameter, thread_friction, thread_angle
-
-    def screw_torque(self, force):
-        """Torque [N m] that turns the screw against an axial nut force ``force`` [N] (raising the load,
-        the worse sense): ``F d2/2 tan(lambda + rho')`` with the lead angle ``lambda = atan(s / (pi d2))``
-        and the friction angle of the thread flanks ``rho' = atan(mu / cos(beta/2))`` (``screw_diameter``
-        d2 = pitch diameter, ``thread_friction`` mu, ``thread_angle`` beta: 30 deg trapezoidal)."""
-        lam = math.atan(self.lead / (math.pi * self.screw_diameter))
-        rho = math.atan(self.thread_friction / math.cos(self.thread_angle / 2))
-        return force * self.screw_diameter / 2 * math.tan(lam + rho)
-
-    def facts(self):
-        return [("screw lead [mm]", self.lead * 1e3), ("lever arm at the nut [mm]", self.R0 * 1e3),
-                ("lever arm at the sleeve [mm]", self.R0P * 1e3)]
-
-    def nut_position(self, phi):
-        """x2 [m] of the nut for the screw angle ``phi`` [rad]."""
-        return self.lead / (2 * math.pi) * phi
-
-    def lever_angle(self, x2):
-        """phi4 [rad] of the lever for the nut position ``x2`` [m] (phi4 = atan(x2/R0), sources B)."""
-        return ca.atan(x2 / self.R0)
-
-    def sleeve_position(self, phi4):
-        """x6 [m] of the sleeve for the lever angle ``phi4`` [rad] (x6 = R0P tan(phi4P), phi4P = phi4 + offset)."""
-        return self.R0P * (ca.tan(phi4 + self.offset) - math.tan(self.offset))
-
-    def position(self, phi):
-        return self.sleeve_position(self.lever_angle(self.nut_position(phi)))
-
-    def chain(self):
-        return [("nut", self.nut_position, "m"), ("lever", self.lever_angle, "rad"), ("sleeve", self.sleeve_position, "m")]
-
-    def inverse_position(self, x):
-        phi4 = ca.atan(x / self.R0P + math.tan(self.offset)) - self.offset
-        return 2 * math.pi / self.lead * self.R0 * ca.tan(phi4)
-
-    def range_error(self, x_min: float, x_max: float) -> str | None:
-        """The lever (both arms) within +-:data:`LEVER_LIMIT_DEG`: beyond it tan() runs away and the
-        nut no longer tilts the lever (the mechanism's own limit is far inside)."""
-        for x in (x_min, x_max):
-            phi4 = math.atan(x / self.R0P + math.tan(self.offset)) - self.offset
-            for angle in (phi4, phi4 + self.offset):
-                if abs(math.degrees(angle)) > LEVER_LIMIT_DEG:
-                    return (f"the sleeve position {x * 1e3:g} mm turns the lever to {math.degrees(angle):.1f} deg, "
-                            f"past +-{LEVER_LIMIT_DEG:g} deg")
-        return None
-
-
 class Gearbox(Transmission):
     """A gearbox of ``ratio`` motor turns per output turn driving a rotary load: ``x = phi / ratio`` (the
     load's angle [rad] from the motor's); ``inertia`` [kg m^2] is the gearbox's own, reduced to the motor
@@ -476,11 +409,6 @@ class Gearbox(Transmission):
         return f"Gearbox(ratio={self.ratio:g}, inertia={self.inertia:g} kg m^2)"
 
 
-#: Lead angle plus the flanks' friction angle of a screw the motor turns [deg]: at 90 deg the torque
-#: F d2/2 tan(lambda + rho') has no finite value (beyond it, it changes sign): no drive moves the nut.
-SCREW_ANGLE_MAX_DEG = 90.0
-
-
 def check_reach(tr: Transmission, fields, key: str, timing, remedy: str) -> None:
     """Refuse (naming ``key`` of ``fields``) a transmission ``tr`` whose range the positions of ``timing``
     leave (:meth:`Transmission.range_error`); ``remedy`` says what to change."""
@@ -492,9 +420,3 @@ def check_reach(tr: Transmission, fields, key: str, timing, remedy: str) -> None
         if moved and fields.where(key) not in fields.overridden:
             raise ProblemError(fields.file, moved[0], f"{message} (value from --set)")
         raise fields.error(key, message)
-
-
-#: The lever angle a screw-lever transmission may reach [deg] (both arms): tan() of the sleeve arm
-#: grows without bound toward 90 deg; at 80 deg one step of the motor moves the sleeve 33 times as
-#: far as at 0 deg -- a toggle, no longer a transmission.
-LEVER_LIMIT_DEG = 80.0

@@ -23,7 +23,6 @@ A crank that turns through the extremes (the hybrid, designed in crank coordinat
 
 from __future__ import annotations
 
-import copy
 import math
 from dataclasses import dataclass
 from functools import lru_cache
@@ -298,11 +297,7 @@ class LinkageTransmission(Transmission):
 
     def with_gearbox(self, entry) -> "LinkageTransmission":
         """The same linkage with the catalogue's gearbox ``entry`` (drive/gearboxes.py) between motor and crank."""
-        tr = copy.copy(self)
-        for cached in ("_fns", "_inv", "_stage_fns"):   # functions of the motor angle: built again for this ratio
-            tr.__dict__.pop(cached, None)
-        tr.ratio, tr.inertia, tr.gearbox = float(entry.ratio), float(entry.inertia), entry.name
-        return tr
+        return self.replaced(ratio=float(entry.ratio), inertia=float(entry.inertia), gearbox=entry.name)
 
     def analysis(self, problem, with_dynamics: bool = False) -> dict | None:
         """The linkage with its crank turning at the constant speed of one turn a machine cycle (linkage/summary.py:

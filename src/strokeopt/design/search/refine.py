@@ -23,7 +23,7 @@ from ..transcription.collocation import Mesh
 from ...io.load_units import error_unit
 from .diagnose import diagnose
 from .fine_grid import drive_checks_fine, fine_grid_report
-from ..transcription.free import free_values
+from ..transcription.free import free_values, with_free_values
 from ..transcription.limits import enforced_checks
 from ..transcription.nlp import Nlp, prepare
 from ..transcription.objectives import TIME_SCALE, free_time, is_peak_torque, needs_terms
@@ -324,13 +324,8 @@ def solve_at_rate(req: SolveRequest) -> Outcome:
         radius = motor = None
         worst = fine["worst_relative_violation"]
         found = free_values(nlp, x)
-        if drive is not None and found:  # the checks see the load with the free parameters found
-            from copy import copy
-
-            from ...drive.spec import with_model_springs
-
-            drive = copy(drive)
-            drive.load = with_model_springs(drive.load, found)
+        if drive is not None and found:  # the checks see the load and transmission with the free parameters found
+            drive = with_free_values(drive, found)
         if drive is not None:
             dm = nlp.graph.drive_model
             radius = None if dm.radius is None else float(nlp.value(dm.radius, x).item())

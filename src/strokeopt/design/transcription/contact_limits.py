@@ -20,6 +20,7 @@ import numpy as np
 
 from .collocation import fine_grid
 from .limits import Limit, LimitGroup
+from .free import model_values
 from .pins import crossings, pin_motion
 
 
@@ -78,7 +79,7 @@ class KeepClosed(Limit):
         cd = req.contact
         if cd is None or not cd.settings.keep_closed:
             return []
-        stiffness = outcome.free_values
+        stiffness = model_values(outcome.free_values)
         rows = []
         for name in cd.settings.keep_closed:
             low = np.inf

@@ -100,7 +100,7 @@ class DriveModel:
         drive, choice = req.drive, req.choice
         if drive.own_transmission is not None:
             radius, r_ref = None, 1.0
-            trans = drive.own_transmission
+            trans = g.transmission  # the problem's, with its free fields (free.build_free)
             inertia = trans.inertia
         else:
             lo, hi = drive.radius_bounds()

@@ -172,6 +172,9 @@ class Graph:
     pin_motions: dict = field(default_factory=dict)  # (move, position) -> (weight, v, a) at the pin (pins.pin_motion)
     load: Any = None  # the drive's load, with the free model parameters in it (free.build_free)
     free_stiffness: dict = field(default_factory=dict)  # element name -> stiffness symbol (free.build_free)
+    #: the problem's own transmission with its free fields (free.build_free); None on a belt
+    transmission: Any = None
+    free_fields: dict = field(default_factory=dict)  # transmission field -> its symbol, the file's unit (free.py)
 
     @property
     def problem(self):

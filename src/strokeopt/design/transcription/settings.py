@@ -231,24 +231,38 @@ def _dotted(prefix: str, table: dict) -> dict:
 
 def parse_free(f) -> tuple:
     """Read ``[design.free.<element>]`` tables: ``stiffness_N_m = [lower, upper]`` (element names are checked
-    against the model by design/free.py); returns ``(element, lower, upper)`` per table."""
+    against the model by design/free.py), and ``[design.free.transmission]``: ``<field> = [lower, upper]`` in the
+    field's unit (checked against the transmission there); returns ``(name, lower, upper)`` per entry, a
+    transmission's named ``transmission.<field>``."""
     if f is None:
         return ()
     out = []
     for name in list(f.data):
         t = f.table(name)
-        bounds = t.raw("stiffness_N_m")
-        if (not isinstance(bounds, list) or len(bounds) != 2
-                or not all(isinstance(b, (int, float)) and not isinstance(b, bool) for b in bounds)):
-            raise t.error("stiffness_N_m", f"needs bounds [lower, upper] in N/m, got {bounds!r}")
-        lo, hi = float(bounds[0]), float(bounds[1])
+        if name == "transmission":
+            for key in list(t.data):
+                lo, hi = _bounds(t, key, "in the field's unit")
+                if not (0 < lo <= hi < math.inf):
+                    raise t.error(key, f"bounds [{lo:g}, {hi:g}] must satisfy 0 < lower <= upper")
+                out.append((f"transmission.{key}", lo, hi))
+            t.finish()
+            continue
+        lo, hi = _bounds(t, "stiffness_N_m", "in N/m")
         # a stiffness of 1 N/m (a hair spring) to 1e9 N/m (a penalty contact); equal bounds fix it there
         if not (1.0 <= lo <= hi <= 1e9):
-            raise t.error("stiffness_N_m", f"bounds {bounds!r} must satisfy 1 <= lower <= upper <= 1e9 (N/m)")
+            raise t.error("stiffness_N_m", f"bounds [{lo:g}, {hi:g}] must satisfy 1 <= lower <= upper <= 1e9 (N/m)")
         t.finish()
         out.append((name, lo, hi))
     f.finish()
     return tuple(out)
+
+
+def _bounds(t, key: str, unit: str) -> tuple[float, float]:
+    bounds = t.raw(key)
+    if (not isinstance(bounds, list) or len(bounds) != 2
+            or not all(isinstance(b, (int, float)) and not isinstance(b, bool) for b in bounds)):
+        raise t.error(key, f"needs bounds [lower, upper] {unit}, got {bounds!r}")
+    return float(bounds[0]), float(bounds[1])
 
 
 def parse_contact(f) -> ContactSettings | None:
