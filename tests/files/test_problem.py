@@ -98,6 +98,8 @@ def test_set_overrides_apply(reference_path):
 def test_set_index_out_of_range(reference_path):
     with pytest.raises(ProblemError, match=r"timing.intervals\[9\].*no element 9"):
         load_problem(reference_path, ["timing.intervals[9].law=poly5"])
+    with pytest.raises(ProblemError, match=r"no element 0 \(there are \d+, counted from 1\)"):
+        load_problem(reference_path, ["timing.intervals[0].law=poly5"])
 
 
 def test_law_on_a_dwell_is_an_error(write_problem):

@@ -18,6 +18,9 @@ K2 = "model.springs.k2.stiffness_N_m"
 
 @pytest.mark.parametrize("text, words", [
     ("model.springs.k9.stiffness_N_m=±10%", "no such field"),
+    ("model.spring.k2.stiffness_N_m=±10%", "deco2000_needle_bar.toml (did you mean 'springs'?)"),
+    ("drive.load_forces[0].x=±10%", "no element 0 (there are 1, counted from 1)"),   # arrays count from 1
+    ("drive.load_forces[9].x=±10%", "no element 9 (there are 1) in"),
     ("problem.name=±10%", "not a number"),
     (f"{K2}=±0%", "must be positive"),
     (f"{K2}=±-5%", "the scatter must be positive, got -5"),

@@ -174,6 +174,12 @@ def parse_override(text: str) -> tuple[list, Any]:
 REMOVE = object()
 
 
+def missing_element(seg: int, node) -> str:
+    """Why ``[seg]`` finds nothing in ``node``: arrays of tables count from 1 in a path, as a reader counts them."""
+    count = len(node) if isinstance(node, list) else 0
+    return f"no element {seg} (there are {count}{', counted from 1' if seg == 0 and count else ''})"
+
+
 def _format_path(path: list) -> str:
     out = ""
     for p in path:
@@ -191,7 +197,7 @@ def apply_overrides(data: dict, overrides: list[str], file: str) -> frozenset:
             where = _format_path(path[: depth + 1])
             if isinstance(seg, int):
                 if not isinstance(node, list) or not 1 <= seg <= len(node):
-                    raise ProblemError(file, where, f"--set {text}: no element {seg} (there are {len(node) if isinstance(node, list) else 0})")
+                    raise ProblemError(file, where, f"--set {text}: {missing_element(seg, node)}")
                 node = node[seg - 1]
             else:
                 if isinstance(node, dict) and seg not in node and depth > 0:

@@ -107,15 +107,16 @@ def parse_tolerance(text: str, problem, option: str = "--tolerance") -> Toleranc
 
 def _number_at(problem, field: str, option: str) -> float:
     """The number at the ``--set`` path ``field`` of the problem's data, or ProblemError naming it."""
-    from ..io.fields import parse_override
+    from ..io.fields import did_you_mean, missing_element, parse_override
 
     path, _ = parse_override(f"{field}=0")
     node = problem.data
     for seg in path:
-        ok = (isinstance(seg, int) and isinstance(node, list) and 1 <= seg <= len(node)) or \
-             (isinstance(seg, str) and isinstance(node, dict) and seg in node)
-        if not ok:
-            raise ProblemError(option, field, f"no such field in {problem.file}")
+        if isinstance(seg, int) and not (isinstance(node, list) and 1 <= seg <= len(node)):
+            raise ProblemError(option, field, f"{missing_element(seg, node)} in {problem.file}")
+        if isinstance(seg, str) and not (isinstance(node, dict) and seg in node):
+            raise ProblemError(option, field, f"no such field in {problem.file}"
+                                              f"{did_you_mean(seg, node) if isinstance(node, dict) else ''}")
         node = node[seg - 1] if isinstance(seg, int) else node[seg]
     if isinstance(node, bool) or not isinstance(node, (int, float)):
         raise ProblemError(option, field, f"is {node!r}, not a number: a tolerance scatters a number")
