@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -147,6 +148,20 @@ def test_checks_and_margins():
     assert not bad.ok and bad.margin == pytest.approx(-0.25)
     assert binding_check([ok, bad]) is bad
     assert Check("c", 1.0, 0.0, "-").margin == -math.inf
+    # at the limit within rounding (a speed scaled by a rate ratio lands a few last places above it)
+    assert Check("speed", 4000.0 * (1 + 4e-16), 4000.0, "rpm").ok and 4000.0 * (1 + 4e-16) > 4000.0
+    assert not Check("speed", 4000.0 * (1 + 1e-9), 4000.0, "rpm").ok
+
+
+def test_max_spm_reaches_a_speed_limit_exactly():
+    """A pair limited by its speed alone runs up to the rate where the speed meets the limit, that rate included
+    (the loom's DT4 motor: 3200 rpm at 200 spm against its 4000 rpm is 250 spm, not 249)."""
+    problem = load_problem(Path(__file__).resolve().parents[2] / "problems" / "loom_beatup_sixbar.toml")
+    sizing = size_drive(problem, motors=["DT4-2-10-Rx0-5000"], find_max_spm=True)
+    row = next(c for c in sizing.candidates if c.pulley.name == "planetary-160-i16")
+    speed = next(c for c in row.checks if c.name == "peak_speed")
+    assert (speed.value, speed.limit) == pytest.approx((3200.0, 4000.0), rel=1e-9)
+    assert row.max_spm == 250 and row.max_spm_binding == "peak_speed"
 
 
 def test_catalogue_table_is_traceable(sized600, cat):

@@ -47,7 +47,7 @@ class Check:
 
     @property
     def ok(self) -> bool:
-        return bool(self.value <= self.limit)
+        return within_limit(self.value, self.limit)
 
     def as_dict(self) -> dict:
         return {"name": self.name, "value": self.value, "limit": self.limit, "unit": self.unit,
@@ -101,8 +101,14 @@ def within_limit(value: float, limit: float, tolerance: float = 0.0) -> bool:
     no more than ``tolerance`` (relative: a design's ``[design] check_tolerance``, the violation between
     collocation nodes it accepts; an impact velocity's 2 % of the rigid cluster against the simulation; 0 for
     a classic law's table). The design's check rows, its full servo simulation, the contact verdict, the
-    trade-off and the report all use it."""
-    return bool(value <= limit * (1.0 + tolerance))
+    trade-off and the report all use it. A value equal to the limit within floating-point rounding
+    (:data:`ROUNDING`, relative) meets it: a rate at which a speed reaches its limit exactly passes there."""
+    return bool(value <= limit * (1.0 + tolerance) + ROUNDING * abs(limit))
+
+
+#: The relative rounding :func:`within_limit` forgives: a few units in the last place of a double (a speed scaled
+#: by a rate ratio, 3200 rpm x 250 / 200, is 4000.0000000000005); far below any tolerance a check states.
+ROUNDING = 1e-12
 
 
 def torque_limit(motor, limits: DriveLimits) -> float:
