@@ -47,26 +47,12 @@ def test_the_bound_is_below_every_motors_optimum():
         assert bound <= design.check_value("peak_torque") * (1 + 1e-3), motor.name
 
 
-@pytest.mark.slow  # two catalogue searches at 980 spm
-def test_pruned_search_gives_the_exhaustive_answer(capsys):
-    out = {}
-    for prune in ("true", "false"):
-        assert main(["solve", str(REFERENCE), "--spm", "980", "--set", f"design.prune_catalogue={prune}",
-                     "--json", "--plot", "none"]) == 0
-        out[prune] = json.loads(capsys.readouterr().out)
-    a, b = out["true"], out["false"]
-    assert (a["motor"], a["pulley_teeth"]) == (b["motor"], b["pulley_teeth"]) == ("055U2C30", 34)
-    assert a["objective_value"] == pytest.approx(b["objective_value"], rel=1e-9)
-    assert any("3 of 7 motors ruled out before solving" in n for n in a["notes"])
-    # tried best bound first, the search stops where no bound left can beat the design found
-    assert any("2 motors not solved" in n and "DSM4-07.34, CMP50M3000" in n for n in a["notes"])
-
-
-@pytest.mark.slow  # ten catalogue searches: five rates, with and without pruning
-def test_pruned_search_gives_the_exhaustive_answer_over_a_sweep():
+@pytest.mark.slow  # ten catalogue searches: five rates, with and without pruning; one pruned solve
+def test_pruned_search_gives_the_exhaustive_answer_over_a_sweep(capsys):
     """Every rate of a sweep across the catalogue's range (the cheap rates where one motor wins at once, the
     rates near the limit where the best-bound motor fails and is checked for feasibility first, and a rate no
-    motor can drive): the same motor, pulley and objective, or the same refusal, with and without pruning."""
+    motor can drive): the same motor, pulley and objective, or the same refusal, with and without pruning; and
+    the command line's pruned solve at 980 spm gives the exhaustive answer there, saying what it skipped."""
     rates = [500.0, 800.0, 940.0, 980.0, 1000.0]
     rows = {}
     for prune in (True, False):
@@ -80,6 +66,13 @@ def test_pruned_search_gives_the_exhaustive_answer_over_a_sweep():
         else:  # the same closest motor and limit named
             assert a["reason"].split(";")[1].split("(")[0] == b["reason"].split(";")[1].split("(")[0], a["spm"]
     assert [r["feasible"] for r in rows[True]] == [True, True, True, True, False]
+    assert main(["solve", str(REFERENCE), "--spm", "980", "--json", "--plot", "none"]) == 0   # prunes by default
+    a, b = json.loads(capsys.readouterr().out), rows[False][rates.index(980.0)]
+    assert (a["motor"], a["pulley_teeth"]) == (b["motor"], b["pulley_teeth"]) == ("055U2C30", 34)
+    assert a["objective_value"] == pytest.approx(b["objective_value"], rel=1e-6)
+    assert any("3 of 7 motors ruled out before solving" in n for n in a["notes"])
+    # tried best bound first, the search stops where no bound left can beat the design found
+    assert any("2 motors not solved" in n and "DSM4-07.34, CMP50M3000" in n for n in a["notes"])
 
 
 def test_a_motor_near_its_limit_is_checked_for_feasibility_first():
