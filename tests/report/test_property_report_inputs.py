@@ -140,8 +140,8 @@ def _design_path(tmp_path, data, kind) -> str:
     return str(path)
 
 
-@pytest.mark.slow  # 300 command lines; the answered ones run the servo simulation and the contact scene
-@settings(max_examples=300, derandomize=True, deadline=None, database=None,
+@pytest.mark.slow  # 150 command lines; the answered ones run the servo simulation and the contact scene
+@settings(max_examples=150, derandomize=True, deadline=None, database=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture,
                                  HealthCheck.data_too_large])
 @given(data=st.data())
@@ -155,8 +155,8 @@ def test_report_of_any_design_file_and_options_answers_or_refuses_in_one_line(tm
     _answered_once(*_run(argv + (["--json"] if json_mode else [])), json_mode, page)
 
 
-@pytest.mark.slow  # 300 command lines; the answered ones judge two or three designs
-@settings(max_examples=300, derandomize=True, deadline=None, database=None,
+@pytest.mark.slow  # 150 command lines; the answered ones judge two or three designs
+@settings(max_examples=150, derandomize=True, deadline=None, database=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture,
                                  HealthCheck.data_too_large])
 @given(data=st.data())

@@ -79,6 +79,18 @@ def test_study_is_reproducible_and_matches_the_full_simulation(tmp_path, capsys)
     assert main(argv) == 0
     again = json.loads(capsys.readouterr().out)
     assert first["rows"] == again["rows"] and first["yield"] == again["yield"]  # same seed, same numbers
+    # the yield counts what is judged: the lag and impact velocity (no [design.contact] limits) are named beside it
+    # with their range over the samples; set the limits and they are judged (and counted)
+    named = {c["criterion"]: c for c in first["not_judged"]}
+    assert set(named) == {"lag", "impact velocity"}
+    lags = [r["max_lag_mm"] for r in first["rows"]]
+    assert (named["lag"]["low"], named["lag"]["high"], named["lag"]["samples"]) == (min(lags), max(lags), 8)
+    assert named["impact velocity"]["limit_field"] == "design.contact.impact_velocity_max_m_s"
+    limits = ["--set", f"design.contact.lag_max_mm={min(lags) + 0.5 * (max(lags) - min(lags))!r}",
+              "--set", "design.contact.impact_velocity_max_m_s=5.0"]
+    assert main([a for a in argv if a != "--json"] + limits) == 0
+    text = capsys.readouterr().out
+    assert "not judged" not in text and "failed: lag in " in text
     assert len(first["rows"]) == 8 and {r[K2] for r in first["rows"]} <= set(r[K2] for r in again["rows"])
     # three samples re-simulated as a user would: verify the design with the sampled k2 set
     for row in first["rows"][:3]:

@@ -27,6 +27,9 @@ def robust_text(report: dict) -> str:
               for t in report["tolerances"]]
     lines.append(f"yield: {100 * report['yield']:.1f} % meet every limit the problem sets (95 % interval "
                  f"{100 * lo:.1f} to {100 * hi:.1f} %)")
+    for c in report.get("not_judged", ()):   # what the yield does not count: no limit judges it
+        values = (f" {c['low']:.4g} to {c['high']:.4g} {c['unit']}" if c["low"] is not None else "")
+        lines.append(f"not judged: {c['criterion']}{values} in {c['samples']} samples (no limit: set {c['limit_field']})")
     if report["failed_by"]:
         lines.append("failed: " + ", ".join(f"{name} in {n} samples" for name, n in
                                             sorted(report["failed_by"].items(), key=lambda kv: -kv[1])))
@@ -102,7 +105,8 @@ def plot_robust(report: dict, path, limits: dict | None = None):
     axes[2].set_xticks([-1, -0.5, 0, 0.5, 1])  # not crowded at any figure width
     axes[2].set_xlabel("Spearman rank correlation [-]")
     axes[2].legend(loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=min(3, len(keys)), fontsize=8)
+    unjudged = [c["criterion"] for c in report.get("not_judged", ())]
     fig.suptitle(f"{report['problem']}, {cycle_of(report).rate(report['spm'])}: yield {100 * report['yield']:.1f} % of "
-                 f"{report['samples']} samples")
+                 f"{report['samples']} samples" + (f" ({', '.join(unjudged)} not judged)" if unjudged else ""))
     fig.savefig(path, dpi=120)
     plt.close(fig)

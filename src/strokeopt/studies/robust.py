@@ -231,7 +231,9 @@ def judge_sample(design, overrides: list[str]) -> dict:
         include_pulley_inertia=getattr(design.settings, "include_pulley_inertia", True))
     sampled = replace(design, problem=problem, drive=drive, verification=None, status="optimal")
     verified = verify_design(sampled, options=SAMPLE_SCENE_OPTIONS)
-    row, failed = {}, []
+    row, failed, unjudged = {}, [], []
+    if verified.accuracy is None and any(itv.handover for itv in problem.timing.intervals):
+        unjudged.append("handover accuracy")   # no servo model: the design's note says why
     if verified.accuracy is not None:
         scale, unit = error_unit(problem.timing.rotary)   # mm on a linear load, deg on a rotary one
         row[f"handover_error_{unit}"] = verified.accuracy.handover_error * scale
@@ -246,13 +248,36 @@ def judge_sample(design, overrides: list[str]) -> dict:
             row[key] = c["value"]
         if c["ok"] is False and c["criterion"] != "handover accuracy":
             failed.append(c["criterion"])
+        if c["ok"] is None and c["criterion"] in NOT_JUDGED:
+            unjudged.append(c["criterion"])
     for check in _drive_checks(sampled):
         if check.name in DRIVE_RESULTS:
             row[DRIVE_RESULTS[check.name]] = float(check.value)
             if not check.ok:
                 failed.append(check.name)
-    row.update(ok=not failed, failed=failed)
+    row.update(ok=not failed, failed=failed, not_judged=unjudged)
     return row
+
+
+#: The criteria a sample may leave unjudged, with the key of their value in its row and the field that would
+#: judge them (the verification's own: a lag or impact velocity without a [design.contact] limit; a handover
+#: without a servo model)
+NOT_JUDGED = {"lag": ("max_lag_mm", "mm", "design.contact.lag_max_mm"),
+              "impact velocity": ("impact_velocity_m_s", "m/s", "design.contact.impact_velocity_max_m_s"),
+              "handover accuracy": (None, "", "[servo] (the servo loop and belt model)")}
+
+
+def unjudged_summary(rows: list[dict]) -> list[dict]:
+    """The criteria some sample left unjudged: each with the range of its values over the samples and the field
+    that would judge it (a yield counts only what is judged: these are named beside it)."""
+    out = []
+    for name in dict.fromkeys(n for r in rows for n in r.get("not_judged", ())):
+        key, unit, field = NOT_JUDGED[name]
+        values = [r[key] for r in rows if key is not None and isinstance(r.get(key), (int, float))]
+        out.append({"criterion": name, "samples": sum(name in r.get("not_judged", ()) for r in rows),
+                    "low": min(values) if values else None, "high": max(values) if values else None,
+                    "unit": unit, "limit_field": field})
+    return out
 
 
 def _drive_checks(design) -> list:
@@ -326,4 +351,5 @@ def summarise(rows: list[dict], tolerances: list[Tolerance], problem, spm: float
             "seed": seed, "tolerances": [{"field": t.field, "nominal": t.nominal, "lower": t.bounds[0],
                                           "upper": t.bounds[1], "distribution": t.distribution} for t in tolerances],
             "yield": good / n if n else 0.0, "yield_interval": [lo, hi], "failed_by": failed_by,
+            "not_judged": unjudged_summary(rows),
             "worst": worst, "sensitivity": sens, "rows": rows}
