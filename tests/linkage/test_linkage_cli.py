@@ -39,7 +39,26 @@ def test_linkage_text(capsys):
     assert main(["linkage", str(BLIND), "--plot", "none"]) == 0
     text = capsys.readouterr().out
     assert "mobility 1, 6 links (with the ground), 7 revolute joints, 2 independent loops" in text
-    assert "Alt's transmission angle" in text and "near-dwell" in text
+    assert "near-dwell" in text
+    # a dyad's quality in degrees against the file's limit (min_transmission_index 0.05 = sin 2.9 deg), the classic
+    # guidance (40 deg, 30 at worst) warned of with the force it costs (1 / sin 4.72 deg = 12.1)
+    assert ("transmission angle of the dyad coupler5, needle_rocker6: least 4.7 deg at 322 deg (Alt's; index 0.082); "
+            "limit 2.9 deg (the file's min_transmission_index 0.05): ok") in text
+    assert "WARNING: 4.7 deg is below the classic guidance" in text and "12.1 times" in text
+    assert "least 68.0 deg" in text and text.count("below the classic guidance") == 1
+    # the needle four-bar sits 0.0567 mm from a change point (s + l = p + q): warned; the first is 30 mm away
+    assert "WARNING: this loop is 0.0567 mm from a change point" in text and text.count("from a change point") == 1
+
+
+def test_the_json_states_the_change_point_distance_and_the_classic_guidance(capsys):
+    assert main(["linkage", str(BLIND), "--json", "--plot", "none"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    loops = out["structure"]["four_bar_loops"]
+    assert [f["near_change_point"] for f in loops] == [False, True]
+    s, l = min(loops[1]["lengths_mm"]), max(loops[1]["lengths_mm"])
+    assert loops[1]["change_point_distance_mm"] == pytest.approx(abs(2 * (s + l) - sum(loops[1]["lengths_mm"])),
+                                                                 abs=1e-3)
+    assert [t["below_classic_guidance"] for t in out["transmission"]] == [False, True]
 
 
 def _one_line_error(capsys, argv, field: str, angle: bool):

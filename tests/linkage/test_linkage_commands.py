@@ -58,7 +58,7 @@ def test_kinematics_text_and_the_machine_s_rate(capsys):
     # --spm is the crank's rate (one turn per machine cycle): the blind-stitch needle at 2000 instead of 2500 rpm
     assert main(["kinematics", str(BLIND), "--spm", "2000", "--plot", "none"]) == 0
     text = capsys.readouterr().out
-    assert "crank 2000 rpm = 209.4395 rad/s" in text and "near-dwell" in text and "Alt's transmission angle" in text
+    assert "crank 2000 rpm = 209.4395 rad/s" in text and "near-dwell" in text and "transmission angle of the dyad" in text
 
 
 def test_kinematics_below_the_transmission_limit_is_exit_1(capsys):

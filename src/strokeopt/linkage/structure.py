@@ -62,10 +62,28 @@ class FourBar:
     kind: str                         # relative to the reference link (ground, else the crank)
     reference: str
 
+    @property
+    def change_point_distance(self) -> float:
+        """``|s + l - (p + q)|`` [m]: how far the lengths are from a change point, where the loop can fold onto a
+        line and pass into its other branch (a tolerance of this size on any link changes its Grashof class)."""
+        s, l = min(self.lengths), max(self.lengths)
+        return abs(2 * (s + l) - sum(self.lengths))
+
+    @property
+    def near_change_point(self) -> bool:
+        """Within :data:`CHANGE_POINT_WARN` of the longest link from a change point (and not one)."""
+        return self.grashof != "change point" and self.change_point_distance < CHANGE_POINT_WARN * max(self.lengths)
+
     def to_dict(self) -> dict:
         return {"links": list(self.links), "joints": list(self.joints),
                 "lengths_mm": [round(v * 1e3, 4) for v in self.lengths], "grashof": self.grashof,
-                "class": self.kind, "relative_to": self.reference}
+                "class": self.kind, "relative_to": self.reference,
+                "change_point_distance_mm": self.change_point_distance * 1e3, "near_change_point": self.near_change_point}
+
+
+#: A four-bar within this share of its longest link from a change point is warned of (branch or toggle risk): 1 %,
+#: a few tenths of a millimetre on a machine's links, the size of a link's manufacturing and wear tolerances.
+CHANGE_POINT_WARN = 0.01
 
 
 @dataclass(frozen=True)

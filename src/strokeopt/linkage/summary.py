@@ -63,6 +63,12 @@ def output_summary(kin: Kinematics, cycle: Cycle, name: str, omega: float, share
             "peaks": {"speed": peak(v), "acceleration": peak(a), "jerk": peak(j)}, "table": rows}
 
 
+#: The classic guidance for a dyad's least transmission angle (Alt's) [deg]: aim for 40, 30 at worst; below it
+#: the joint force grows as 1 / sin of the angle for the same output torque. Warned of, not judged: the file's
+#: ``min_transmission_index`` is the limit.
+CLASSIC_TRANSMISSION_ANGLE_DEG = (40.0, 30.0)
+
+
 def transmission_summary(kin: Kinematics, cycle: Cycle, limit: float) -> list[dict]:
     out = []
     for g, group in enumerate(cycle.groups):
@@ -73,6 +79,7 @@ def transmission_summary(kin: Kinematics, cycle: Cycle, limit: float) -> list[di
                "limit": limit, "ok": bool(idx[k] >= limit)}
         if group.kind == "dyad":   # Alt's transmission angle: the index is its sine
             row["min_transmission_angle_deg"] = math.degrees(math.asin(min(1.0, idx[k])))
+            row["below_classic_guidance"] = row["min_transmission_angle_deg"] < CLASSIC_TRANSMISSION_ANGLE_DEG[1]
         out.append(row)
     return out
 

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from ..linkage.summary import CLASSIC_TRANSMISSION_ANGLE_DEG
 from .format import format_table
 
 
@@ -24,6 +25,10 @@ def linkage_text(s: dict) -> str:
     for f in st["four_bar_loops"]:
         lines.append(f"  four-bar loop {'-'.join(f['joints'])} ({', '.join(f['links'])}): {f['grashof']}, "
                      f"{f['class']} relative to {f['relative_to']}")
+        if f.get("near_change_point"):
+            lines.append(f"  WARNING: this loop is {f['change_point_distance_mm']:.3g} mm from a change point (shortest + "
+                         "longest = sum of the other two): a link tolerance of that size can let it fold onto a line "
+                         "and pass into its other branch (toggle)")
     c = s["closure"]
     lines.append(f"closure: {c['angles']} input angles, largest residual {c['max_residual_m']:.1e} m, pose after one "
                  f"turn off by {c['return_error_m']:.1e} m")
@@ -31,10 +36,21 @@ def linkage_text(s: dict) -> str:
         lines += ["", _output_text(o, s["near_dwell_pct"])]
     lines.append("")
     for t in s["transmission"]:
-        alt = f" (Alt's transmission angle {t['min_transmission_angle_deg']:.1f} deg)" \
-            if "min_transmission_angle_deg" in t else ""
-        lines.append(f"transmission index of the {t['group']} {', '.join(t['links'])}: min {t['min_index']:.3f} at "
-                     f"{t['at_deg']:g} deg{alt}; limit {t['limit']:g}: {'ok' if t['ok'] else 'BELOW THE LIMIT'}")
+        verdict = "ok" if t["ok"] else "BELOW THE LIMIT"
+        if "min_transmission_angle_deg" in t:   # a dyad: its quality in degrees (the index is the angle's sine)
+            angle = t["min_transmission_angle_deg"]
+            limit = math.degrees(math.asin(min(1.0, t["limit"])))
+            lines.append(f"transmission angle of the {t['group']} {', '.join(t['links'])}: least {angle:.1f} deg at "
+                         f"{t['at_deg']:g} deg (Alt's; index {t['min_index']:.3f}); limit {limit:.1f} deg (the file's "
+                         f"min_transmission_index {t['limit']:g}): {verdict}")
+            if t.get("below_classic_guidance"):
+                lines.append(f"  WARNING: {angle:.1f} deg is below the classic guidance for a transmission angle "
+                             f"({CLASSIC_TRANSMISSION_ANGLE_DEG[0]:g} deg, {CLASSIC_TRANSMISSION_ANGLE_DEG[1]:g} at "
+                             f"worst): the joint force there is {1 / math.sin(math.radians(angle)):.3g} times the part "
+                             "that turns the output")
+        else:
+            lines.append(f"transmission index of the {t['group']} {', '.join(t['links'])}: min {t['min_index']:.3f} at "
+                         f"{t['at_deg']:g} deg; limit {t['limit']:g}: {verdict}")
     if "dynamics" in s:
         lines += ["", _dynamics_text(s["dynamics"])]
     return "\n".join(lines)
