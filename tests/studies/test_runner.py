@@ -234,6 +234,28 @@ def test_on_local_workers_a_failure_and_a_lost_task_name_their_items():
     assert by_item[4].lost and by_item[5].lost and by_item[4].error.startswith("task lost: ")
 
 
+def _step_killing_once(shared, item, warm):
+    """A study step for the tests: item 4 kills its worker the first time it runs (``shared``: a marker file)."""
+    if item == 4 and not os.path.exists(shared):
+        open(shared, "w").close()
+        os._exit(3)
+    return {"item": item, "warm": warm}, item
+
+
+@pytest.mark.slow
+def test_a_worker_killed_mid_study_is_named_with_the_items_run_again(tmp_path):
+    """Dask runs the killed worker's task again on the other worker: every item is answered, and the runner says
+    which worker was lost and which items ran again (what a study's report prints as where it ran)."""
+    runner = StudyRunner(2)
+    outcomes = run_study(_step_killing_once, [0, 1, 2, 3, 4, 5], str(tmp_path / "killed"), runner=runner)
+    assert [o.row["item"] for o in outcomes] == [0, 1, 2, 3, 4, 5] and all(o.ok for o in outcomes)
+    (loss,) = runner.losses
+    assert loss["worker"].startswith("tcp://127.0.0.1:") and 4 in loss["items"]
+    text = runner.describe()
+    assert text.startswith("2 local worker processes (Dask LocalCluster); 1 worker lost during the study: tcp://")
+    assert "re-run on the others" in text and StudyRunner(2).describe() == "2 local worker processes (Dask LocalCluster)"
+
+
 def test_local_workers_run_without_dask_s_malloc_trim_and_with_one_blas_thread(monkeypatch):
     # docs/studies.md: Dask's MALLOC_TRIM_THRESHOLD_ makes every solve about 10 % slower; one BLAS thread stays
     from strokeopt.studies.runner import WORKER_ENVIRON_UNSET, connected

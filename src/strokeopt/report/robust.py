@@ -25,6 +25,8 @@ def robust_text(report: dict) -> str:
              f"{report['samples']} sampled machines ({report['method']}, seed {report['seed']})"]
     lines += [f"  {t['field']}: {t['lower']:.6g} to {t['upper']:.6g} ({t['distribution']}; nominal {t['nominal']:.6g})"
               for t in report["tolerances"]]
+    if report.get("runner"):   # where it ran, and any worker lost on the way (its samples re-run on the others)
+        lines.append(f"ran on: {report['runner']}")
     lines.append(f"yield: {100 * report['yield']:.1f} % meet every limit the problem sets (95 % interval "
                  f"{100 * lo:.1f} to {100 * hi:.1f} %)")
     for c in report.get("not_judged", ()):   # what the yield does not count: no limit judges it

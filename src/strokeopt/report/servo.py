@@ -182,7 +182,8 @@ def tradeoff_text(report: dict) -> str:
                    "per start": " ".join("-" if r is None else f"{r:g}" for r in p.get("start_max_spm", []))}
                   for p in points]
         columns += [("starts at best", "starts at best"), ("per start", "confirmed per start")]
-    return head + "\n\n" + format_table(points, columns)
+    ran = f"\nran on: {report['runner']}" if report.get("runner") else ""   # and any worker lost on the way
+    return head + ran + "\n\n" + format_table(points, columns)
 
 
 def _words(name: str) -> str:

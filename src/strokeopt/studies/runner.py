@@ -41,7 +41,7 @@ import re
 import threading
 import uuid
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable
 
 from ..errors import ProblemError
@@ -96,15 +96,25 @@ class StudyRunner:
     workers: int = 1
     scheduler: str | None = None
     source: str = "--scheduler"
+    #: what happened to the cluster during the studies it ran (:func:`run_on_client`): one entry per worker that died
+    #: while tasks of a study were on it, ``{"worker": address, "items": [the items Dask ran again elsewhere]}``
+    losses: list = field(default_factory=list, compare=False)
 
     @property
     def in_process(self) -> bool:
         return self.scheduler is None and self.workers == 1
 
     def describe(self) -> str:
+        """Where the study ran, and any worker lost on the way (its tasks re-run on the others)."""
         if self.scheduler is not None:
-            return f"the Dask cluster at {self.scheduler}"
-        return "this process" if self.workers == 1 else f"{self.workers} local worker processes (Dask LocalCluster)"
+            where = f"the Dask cluster at {self.scheduler}"
+        else:
+            where = "this process" if self.workers == 1 else f"{self.workers} local worker processes (Dask LocalCluster)"
+        if not self.losses:
+            return where
+        lost = "; ".join(f"{e['worker']}" + (f" with items {', '.join(map(str, e['items']))} on it, re-run on the others"
+                                              if e["items"] else "") for e in self.losses)
+        return f"{where}; {len(self.losses)} worker{'s' if len(self.losses) > 1 else ''} lost during the study: {lost}"
 
 
 def study_runner(workers=None, scheduler=None, *, tasks: int | None = None, environ=None) -> StudyRunner:
@@ -165,7 +175,8 @@ def run_study(step: Callable, items: Iterable, shared, *, runner: StudyRunner | 
     if runner.in_process or not items:
         return _run_here(step, items, shared, progress, chained, finish)
     with connected(runner, len(items)) as client:
-        return run_on_client(client, step, items, shared, progress=progress, chained=chained, finish=finish)
+        return run_on_client(client, step, items, shared, progress=progress, chained=chained, finish=finish,
+                             losses=runner.losses)
 
 
 # --- in this process --------------------------------------------------------------------------------------------
@@ -252,8 +263,9 @@ class _Completed:
 
 
 def run_on_client(client, step, items: list, shared, *, progress=None, chained: bool = True,
-                  finish: Callable | None = None) -> list[TaskOutcome]:
-    """:func:`run_study` on an open ``distributed.Client`` (one run of items per worker of its cluster)."""
+                  finish: Callable | None = None, losses: list | None = None) -> list[TaskOutcome]:
+    """:func:`run_study` on an open ``distributed.Client`` (one run of items per worker of its cluster); every worker
+    that dies while tasks of the study are on it is appended to ``losses`` (:func:`_lost_workers`)."""
     slots = max(1, len(client.nthreads())) if chained else len(items)
     token = uuid.uuid4().hex[:8]
     scattered = client.scatter(_Shared(shared), broadcast=True, hash=False)
@@ -282,12 +294,36 @@ def run_on_client(client, step, items: list, shared, *, progress=None, chained: 
                 outcomes.append(row.result())
             except Exception as exc:  # noqa: BLE001  (its task, or one it was chained to, was lost)
                 outcomes.append(TaskOutcome(item, error=f"task lost: {_one_line(exc)}", lost=True))
+        if losses is not None:
+            losses += _lost_workers(client, token, items)
         return outcomes
     except BaseException:
         client.cancel(futures + steps, force=True)
         raise
     finally:
         client.cancel([scattered], force=True)
+
+
+def _lost_workers(client, token: str, items: list) -> list[dict]:
+    """The workers the scheduler removed unexpectedly while they held tasks of the study ``token`` (its
+    "remove-worker" events), each with the items whose tasks Dask then ran again elsewhere (in the study's order)."""
+    out = []
+    for worker, keys in client.run_on_scheduler(_removals):
+        ks = sorted({int(m[1]) for k in keys if (m := re.fullmatch(rf"strokeopt-{token}-(\d+)(-\w+)?", k))})
+        if ks:
+            out.append({"worker": worker, "items": [items[k] for k in ks]})
+    return out
+
+
+def _removals(dask_scheduler) -> list[tuple[str, list[str]]]:
+    """On the scheduler: every unexpected removal of a worker it logged, with the keys of the tasks it was running or
+    held (plain data: the event log itself does not pickle)."""
+    out = []
+    for _, event in dask_scheduler.get_events("all"):
+        if isinstance(event, dict) and event.get("action") == "remove-worker" and not event.get("expected"):
+            keys = set(event.get("processing-tasks") or ()) | set(event.get("lost-computed-tasks") or ())
+            out.append((str(event.get("worker", "?")), [str(k) for k in keys]))
+    return out
 
 
 @contextmanager
