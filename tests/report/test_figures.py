@@ -181,3 +181,23 @@ def test_premature_verdict_and_printed_gap_agree(reference):
     assert late["min_gap_N_mm"] < GAP_CLOSED * 1e3  # it printed +0.0014 mm beside "premature: yes"
     early = simulate_scene(reference, "release", 600).metrics
     assert early["premature_release"] is False and early["min_gap_N_mm"] > GAP_CLOSED * 1e3
+
+
+def test_the_sweep_figure_names_its_objective_with_its_unit():
+    """The design sweep's axis names the objective and its unit (it said "objective"), and the peak torque beside
+    it where that is another quantity."""
+    import matplotlib.pyplot as plt
+
+    from strokeopt.report.design import plot_design_sweep
+
+    rows = [{"spm": s, "feasible": True, "objective_value": v, "objective_unit": "m/s^2", "peak_torque_N_m": t,
+             "motor": "055U2B30"} for s, v, t in ((400, 210.0, 0.6), (500, 330.0, 0.9))]
+    fig = plot_design_sweep(rows, objective="min_peak_accel")
+    ax = fig.axes[0]
+    assert ax.get_ylabel() == "min_peak_accel [m/s^2]; peak torque [N m]"
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["optimal min_peak_accel [m/s^2]", "peak torque [N m]"]
+    plt.close(fig)
+    torque = [{**r, "objective_unit": "N m", "objective_value": r["peak_torque_N_m"]} for r in rows]
+    fig = plot_design_sweep(torque, objective="min_peak_torque")
+    assert fig.axes[0].get_ylabel() == "min_peak_torque [N m]"
+    plt.close(fig)

@@ -93,15 +93,18 @@ def plot_design_sweep(rows: list[dict], path=None, objective: str | None = None,
     fig, ax = plt.subplots(figsize=(8, 4), constrained_layout=True)
     ok = [r for r in rows if r["feasible"]]
     bad = [r for r in rows if not r["feasible"]]
+    unit = next((r["objective_unit"] for r in ok if r.get("objective_unit")), "")
+    quantity = f"{objective or 'objective'}" + (f" [{unit}]" if unit else "")
     if ok:
-        ax.plot([r["spm"] for r in ok], [r["objective_value"] for r in ok], "o-", label="optimal objective")
+        ax.plot([r["spm"] for r in ok], [r["objective_value"] for r in ok], "o-", label=f"optimal {quantity}")
         if ok[0].get("peak_torque_N_m") is not None:
             ax.plot([r["spm"] for r in ok], [r["peak_torque_N_m"] for r in ok], "s--", label="peak torque [N m]")
     for r in bad:
         ax.axvline(r["spm"], color="tab:red", alpha=0.4, lw=1)
     cycle = cycle_of(cycle)
     ax.set_xlabel(f"{cycle.rate_name} [{cycle.rate_unit}]")
-    ax.set_ylabel("objective")
+    ax.set_ylabel(quantity if not ok or ok[0].get("peak_torque_N_m") is None or unit == "N m" else
+                  f"{quantity}; peak torque [N m]")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     motors = ", ".join(dict.fromkeys(str(r["motor"]) for r in ok if r.get("motor"))) or "-"
