@@ -192,9 +192,11 @@ def compare_report(datas: list[ReportData]) -> str:
             _row("drive", [drive_text(d.machine, s) for d, s in zip(datas, S)], None),
             _row("--set", ["; ".join(getattr(d.problem, "overrides", ())) or "none" for d in datas], None)]
     built["problem"] = _table(names, rows)
-    rows = [_row(f"objective value [{s0}]" if len({s['objective_unit'] for s in S}) == 1 else "objective value",
-                 [s["objective_value"] for s in S], "objective_value")
-            for s0 in [S[0]["objective_unit"]]]
+    if len({(s["objective"], s["objective_unit"]) for s in S}) == 1:   # one quantity: numbers in one row
+        rows = [_row(f"objective value [{S[0]['objective_unit']}]", [s["objective_value"] for s in S], "objective_value")]
+    else:   # designs for different objectives: each value says what it measures (a peak and an RMS are not one row)
+        rows = [_row("objective value", [f"{h.format_value(s['objective_value'])} {s['objective_unit']} ({s['objective']})"
+                                         for s in S], None)]
     moves = min(len(s["moves"]) for s in S)
     for i in range(moves):
         rotary = is_rotary(datas[0].problem)   # a rotary load's rad/s keys and labels (io/load_units.py)
