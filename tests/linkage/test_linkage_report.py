@@ -6,6 +6,7 @@ table's numbers."""
 from __future__ import annotations
 
 import json
+import re
 from html.parser import HTMLParser
 
 import pytest
@@ -78,6 +79,10 @@ def test_linkage_report_sections_and_numbers(capsys, tmp_path):
     assert tags.values["size.transmission_analysis.dynamics.torque_N_m.min"] == repr(torque)
     text = out.read_text()
     assert sources["size"]["verdict"] in text and "flywheel" in text
+    # the crank angles of the output tables as the grid's (0, 30, 60), not to four digits (30.00, 120.0)
+    angles = re.findall(r'data-key="kinematics\.transmission_analysis\.outputs\[0\]\.table\[\d+\]\.angle_deg" '
+                        r'data-value="[^"]*">([^<]*)<', text)
+    assert angles[:5] == ["0", "30", "60", "90", "120"]
 
 
 def test_the_report_s_options(capsys, tmp_path):

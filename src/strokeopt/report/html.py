@@ -90,10 +90,11 @@ def _attr_value(value) -> str:
     return str(value)
 
 
-def cell(value, key: str | None = None, cls: str = "", digits: int = 4) -> str:
-    """One table cell: the value formatted like the text tables; ``key``: its ``data-key`` (its place in
-    the ``solve --json`` report) with the exact value in ``data-value``."""
-    text = value if isinstance(value, str) and not key else format_value(value, digits)
+def cell(value, key: str | None = None, cls: str = "", digits: int = 4, shown: str | None = None) -> str:
+    """One table cell: the value formatted like the text tables (``shown``: as given, e.g. an angle of a table's
+    grid, 30 not 30.00); ``key``: its ``data-key`` (its place in the ``solve --json`` report) with the exact value
+    in ``data-value``."""
+    text = shown if shown is not None else value if isinstance(value, str) and not key else format_value(value, digits)
     classes = ([cls] if cls else []) + (["text"] if isinstance(value, str) or value is None else [])
     attrs = f' class="{" ".join(classes)}"' if classes else ""
     if key is not None:

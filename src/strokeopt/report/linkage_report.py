@@ -75,7 +75,8 @@ def _output(o: dict, i: int, pct: float) -> str:
         facts.append((f"peak |{q}| [{o[q + '_unit'] if q != 'speed' else o['speed_unit']}]",
                       o["peaks"][q]["max_abs"], f"{key}.peaks.{q}.max_abs"))
     step = max(1, len(o["table"]) // 12)
-    rows = [[h.cell(r["angle_deg"], f"{key}.table[{j}].angle_deg"), h.cell(r["position"], f"{key}.table[{j}].position"),
+    rows = [[h.cell(r["angle_deg"], f"{key}.table[{j}].angle_deg", shown=f"{r['angle_deg']:g}"),
+             h.cell(r["position"], f"{key}.table[{j}].position"),
              h.cell(r["speed"], f"{key}.table[{j}].speed"), h.cell(r["acceleration"], f"{key}.table[{j}].acceleration"),
              h.cell(r["jerk"], f"{key}.table[{j}].jerk")] for j, r in enumerate(o["table"]) if j % step == 0]
     head = ["crank deg", f"position {o['unit']}", f"speed {o['speed_unit']}", f"accel {o['acceleration_unit']}",
@@ -102,7 +103,8 @@ def _transmission(d: LinkageReportData) -> str:
     for i, t in enumerate(d.kinematics["transmission"]):
         key = f"kinematics.transmission_analysis.transmission[{i}]"
         rows.append([h.cell(t["group"]), h.cell(", ".join(t["links"])), h.cell(t["min_index"], f"{key}.min_index"),
-                     h.cell(t["at_deg"], f"{key}.at_deg"), h.cell(t.get("min_transmission_angle_deg")),
+                     h.cell(t["at_deg"], f"{key}.at_deg", shown=f"{t['at_deg']:g}"),
+                     h.cell(t.get("min_transmission_angle_deg")),
                      h.cell(t["limit"], f"{key}.limit"), h.raw_cell(h.verdict(t["ok"]))])
     fig, ax = plt.subplots(figsize=(7.3, 2.8), constrained_layout=True)
     _draw_transmission(ax, d.cycle, d.kinematics["transmission"])
