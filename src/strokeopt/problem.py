@@ -30,6 +30,7 @@ from .io.fields import _REQUIRED, Fields, apply_overrides
 from .motion.laws import LAW_CHOICES, LAW_PARAMETERS, MotionLaw, make_law, points_law
 from .motion.timing import INTERVAL_TIMES, SPM_RANGE, Interval, TimingDiagram
 from .servo.kernel import ServoErrorTerm
+from .servo.plant import varies
 from .servo.settings import parse_servo
 
 if TYPE_CHECKING:
@@ -168,7 +169,9 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
         drive=drive,
         design=design,
         servo=servo,
-        error_terms=(ServoErrorTerm(),) if servo is not None else (),
+        # the design's servo term is the loop's error linear in the stroke (servo/table_term.py): a transmission of
+        # varying ratio has no linear loop, its accuracy is the full simulation's (servo/varying.py), checked after
+        error_terms=(ServoErrorTerm(),) if servo is not None and not varies(transmission, timing) else (),
     )
 
 

@@ -17,7 +17,6 @@ from strokeopt import ProblemError, load_problem
 from strokeopt.cli.main import main
 from strokeopt.servo.accuracy import accuracy_report
 from strokeopt.servo.plant import axis_from_problem
-from strokeopt.servo.settings import ServoSettings
 
 LOOM = Path(__file__).resolve().parents[2] / "problems" / "loom_beatup_servo.toml"
 ARCMIN = math.pi / 10800
@@ -98,12 +97,14 @@ def test_a_belt_drive_refuses_torsion_and_a_gearbox_needs_it(reference):
     assert err.value.field == "servo.torsional_stiffness_N_m_arcmin" and "data sheet" in err.value.message
 
 
-def test_a_crank_has_no_constant_ratio_for_the_servo_model():
+def test_a_crank_s_servo_model_is_rigid():
+    # a crank's ratio changes with its position: its servo model is the rigid drive's own dynamics
+    # (servo/varying.py, tests/servo/test_varying.py); a torsional stiffness through it is refused naming the field
     crank = load_problem(LOOM.parent / "deco2000_crank_slider.toml")
-
     with pytest.raises(ProblemError) as err:
-        axis_from_problem(replace(crank, servo=ServoSettings(torsional_stiffness=1e5)))
-    assert err.value.field == "transmission.type" and "changes with its position" in err.value.message
+        axis_from_problem(replace(crank, servo=replace(crank.servo, torsional_stiffness=1e5)))
+    assert err.value.field == "servo.torsional_stiffness_N_m_arcmin" and "is rigid" in err.value.message
+    assert axis_from_problem(crank).compliance == "rigid" and crank.error_terms == ()
 
 
 @pytest.mark.slow

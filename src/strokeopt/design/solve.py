@@ -106,8 +106,11 @@ def solve_design(problem, *, objective: str | None = None, spm: float | None = N
                     best.status, wall, best.iterations, checks=checks, active_constraints=active, fine_grid=best.fine,
                     notes=notes + _settings_notes(settings, free, nlp, drive), drive=resolved, settings=settings,
                     accuracy_enforced=bool(nlp.request.enforce_accuracy and terms), free_parameters=free)
-    if handover_check is not None and any(c["name"].startswith(HANDOVER_CHECK) for c in checks):
-        design = replace(design, checks=verified_handover(checks, *handover_check(design), settings.check_tolerance))
+    if handover_check is not None and (any(c["name"].startswith(HANDOVER_CHECK) for c in checks) or (
+            drive is not None and any(itv.handover for itv in problem.timing.intervals))):
+        # a drive without a design term (a crank's varying ratio: no linear servo term) is checked all the same
+        design = replace(design, checks=verified_handover(checks, *handover_check(design), settings.check_tolerance,
+                                                          limit_of(settings, problem)))
     return _judge(design, best, drive, terms)
 
 
@@ -183,8 +186,10 @@ def _judge(design: Design, best: Outcome, drive, terms: tuple) -> Design:
         status = "limits exceeded"
         notes.insert(0, "; ".join(
             f"{c['name']} {format_value(c['value'])} {c['unit']} > limit {format_value(c['limit'])} "
-            f"({-100 * c['margin']:.2f} % over), although the design's term gives "
-            f"{format_value(c['design_term'])} {c['unit']}" for c in verified)
+            f"({-100 * c['margin']:.2f} % over), " + (f"although the design's term gives {format_value(c['design_term'])} "
+                                                     f"{c['unit']}" if c["design_term"] is not None else
+                                                     "which the design does not hold (no linear servo term)")
+            for c in verified)
             + ": tighten [design] accuracy_mm or lower the stitch rate")
     value = design.objective_value
     if drive is not None:
@@ -193,7 +198,8 @@ def _judge(design: Design, best: Outcome, drive, terms: tuple) -> Design:
     if free_time(design.objective):
         notes.insert(0, _rate_note(design, best))
     handover = any(itv.handover for itv in problem.timing.intervals)  # a machine without one has nothing to check
-    if drive is not None and handover and not best.handover_values():
+    checked = any(c["name"].startswith(HANDOVER_CHECK) for c in design.checks)   # by a term or the full simulation
+    if drive is not None and handover and not best.handover_values() and not checked:
         why = ("the problem has no [servo] section (servo loop and belt model)" if not terms
                and getattr(problem, "servo", None) is None else "no handover error term applies (error_terms)")
         scale, unit = error_unit(problem.timing.rotary)
@@ -262,20 +268,31 @@ def _check_fixed_accuracy(problem, settings: DesignSettings, terms: tuple) -> No
 HANDOVER_CHECK = "handover accuracy"
 
 
-def verified_handover(checks: list[dict], value: float, what: str, tol: float) -> list[dict]:
+def verified_handover(checks: list[dict], value: float, what: str, tol: float,
+                      limit_unit: tuple[float, str] | None = None) -> list[dict]:
     """The check rows with the handover accuracy rows replaced by one row: ``value`` [m] of a full simulation
     (``what`` names it), judged by the one pass rule within ``tol``, the design's own term beside it as
     ``design_term`` (kept when the rows already hold a full simulation's). The solve and
-    :func:`strokeopt.studies.verified.verify_design` both make the row here."""
+    :func:`strokeopt.studies.verified.verify_design` both make the row here. Where the design has no term (a
+    transmission of varying ratio), the row is added with ``design_term`` None, against ``limit_unit``
+    (:func:`limit_of`)."""
     terms = [c for c in checks if c["name"].startswith(HANDOVER_CHECK)]
-    limit = float(terms[0]["limit"])
-    term = next((c["design_term"] for c in terms if "design_term" in c), sum(float(c["value"]) for c in terms))
-    unit = terms[0]["unit"]   # the rows' unit: mm, or deg for a rotary load
+    if terms:
+        limit, unit = float(terms[0]["limit"]), terms[0]["unit"]   # the rows' unit: mm, or deg for a rotary load
+        term = next((c["design_term"] for c in terms if "design_term" in c), sum(float(c["value"]) for c in terms))
+    else:
+        (limit, unit), term = limit_unit, None
     shown = value * error_unit(unit == "deg")[0]
     row = {"name": f"{HANDOVER_CHECK} ({what})", "value": shown, "limit": limit, "unit": unit,
            "margin": 1.0 - shown / limit if limit > 0 else -math.inf,
            "ok": within_limit(shown, limit, tol), "design_term": term}
     return [c for c in checks if c not in terms] + [row]
+
+
+def limit_of(settings, problem) -> tuple[float, str]:
+    """The handover accuracy of ``settings`` in the unit of the check rows (mm, or deg on a rotary load)."""
+    scale, unit = error_unit(problem.timing.rotary)
+    return settings.accuracy * scale, unit
 
 
 def _need(lim, sigma: float) -> float | None:

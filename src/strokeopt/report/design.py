@@ -183,9 +183,11 @@ def design_text(design: Design, comparison: list[dict] | None = None) -> str:
                                         f"{100 * (design.settings or DesignSettings()).check_tolerance:g} %)"))
         lines += [f"{c['name']}: {format_value(c['value'])} {c['unit']}, the number `strokeopt accuracy --design` prints "
                   f"(sampled position table, largest error over the handover window, plus one encoder count); "
-                  f"the design term, which the solve constrains (the same simulation at instants over the handover "
-                  f"window, the load forces linearised at the design), "
-                  f"gives {format_value(c['design_term'])} {c['unit']}" for c in verified]
+                  + (f"the design term, which the solve constrains (the same simulation at instants over the handover "
+                     f"window, the load forces linearised at the design), "
+                     f"gives {format_value(c['design_term'])} {c['unit']}" if c["design_term"] is not None else
+                     "checked, not held by the solve: a transmission of varying ratio has no linear servo term "
+                     "(servo/varying.py simulates its loop in full)") for c in verified]
         limit = next((c for c in design.checks if c["name"] == "peak_torque"), None)
         if limit is not None and design.motor_spec is not None and design.settings is not None:
             lines.append(f"torque limit {format_value(limit['limit'])} N m = "

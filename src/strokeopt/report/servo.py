@@ -16,13 +16,23 @@ from ..servo.accuracy import AccuracyResult
 from .figures import frame_label
 from ..io.cycle import cycle_of
 from .format import drive_text, format_table, format_value
+from ..transmissions import transmission_label
 
 
 # --------------------------------------------------------------------------- strokeopt accuracy
 
 
 def _axis_lines(report: dict) -> list[str]:
-    """The drive's mechanics in the report's words: a belt's pulley and stiffness, or a gearbox's ratio and torsion."""
+    """The drive's mechanics in the report's words: a belt's pulley and stiffness, a gearbox's ratio and torsion, or a
+    rigid transmission's varying ratio and inertia."""
+    if report.get("compliance") == "rigid":
+        u = report.get("position_unit", "mm")
+        lo, hi = report["inertia_range_kg_m2"]
+        return [f"{report['problem']} at {cycle_of(report).rate(report['spm'])}, {report['label']}: motor {report['motor']}, "
+                f"{transmission_label(report['transmission'])} (rigid), ratio at the handover "
+                f"{report[f'handover_ratio_{u}_per_rad']:.4g} {u}/rad",
+                f"inertia on the motor shaft {lo:.4g} to {hi:.4g} kg m^2 over the stroke (rotor, transmission, load): "
+                "the loop simulated with the drive's own nonlinear dynamics"]
     if report.get("position_unit") == "deg":
         return [f"{report['problem']} at {cycle_of(report).rate(report['spm'])}, {report['label']}: motor {report['motor']}, "
                 f"{report['compliance']} ratio {report['ratio']:g}, load inertia {report['load_inertia_kg_m2']:g} kg m^2",
@@ -41,6 +51,7 @@ def accuracy_text(report: dict) -> str:
     c = report[f"contributions_{u}"]
     sc = report[f"signed_contributions_{u}"]
     rotary = u == "deg"
+    rigid = report.get("compliance") == "rigid"   # a crank, a linkage: no elastic element (servo/varying.py)
     stretch = "gearbox wind-up" if rotary else "belt stretch"
     stretch_key = "max_stretch_deg" if rotary else "max_belt_stretch_mm"
     lines = []
@@ -67,15 +78,16 @@ def accuracy_text(report: dict) -> str:
         f"handover error (largest over {report['handover_window_deg']:g} deg after the end of the handover move at "
         f"{report['handover_angle_deg']:.1f} deg): {format_value(report[f'handover_error_{u}'])} {u} "
         f"(requirement {report[f'requirement_{u}']:g} {u})",
-        f"  servo tracking        {sc['servo_tracking']:+.4f} {u}  ({'motor' if rotary else 'pulley'} {report['pulley_error_at_handover_deg']:.3f} deg)",
-        f"  {stretch:20s}  {sc['belt_stretch']:+.4f} {u}  (inertia {sc['belt_stretch_inertia']:+.4f}, "
-        f"forces {sc['belt_stretch_forces']:+.4f})",
+        f"  servo tracking        {sc['servo_tracking']:+.4f} {u}  ({'motor' if rotary or rigid else 'pulley'} {report['pulley_error_at_handover_deg']:.3f} deg)",
+        *([] if rigid else [f"  {stretch:20s}  {sc['belt_stretch']:+.4f} {u}  (inertia {sc['belt_stretch_inertia']:+.4f}, "
+                            f"forces {sc['belt_stretch_forces']:+.4f})"]),
         f"  encoder quantisation  {c['encoder_quantisation']:.4f} {u}  (one count, added as a bound)",
         f"over the cycle: max error {report[f'max_error_{u}']:.4f} {u}, max servo error "
-        f"{report[f'max_servo_error_{u}']:.4f} {u}, max {stretch} {report[stretch_key]:.4f} {u}; "
-        + (f"residual {report['compliance']} vibration in the dwell after the handover "
-           f"{report[f'residual_vibration_{u}']:.4f} {u}" if report.get("dwell_after_handover", True) else
-           "no dwell follows the handover move (no residual vibration to judge)"),
+        f"{report[f'max_servo_error_{u}']:.4f} {u}"
+        + ("" if rigid else f", max {stretch} {report[stretch_key]:.4f} {u}; "
+           + (f"residual {report['compliance']} vibration in the dwell after the handover "
+              f"{report[f'residual_vibration_{u}']:.4f} {u}" if report.get("dwell_after_handover", True) else
+              "no dwell follows the handover move (no residual vibration to judge)")),
         f"peak torque command {report['peak_torque_command_N_m']:.3f} N m (torque limit "
         f"{format_value(report['torque_limit_N_m'])} N m = {report.get('torque_limit_basis', 'min(motor peak, drive peak limit x rated)')})",
         f"  {report['torque_basis']}",
@@ -86,8 +98,9 @@ def accuracy_text(report: dict) -> str:
     if "laws" in report:
         lines += ["", format_table(report["laws"], [
             ("law", "law"), (f"handover_error_{u}", f"handover {u}"),
-            (f"residual_vibration_{u}", f"residual {report['compliance']} vib. {u}"),
-            (f"max_error_{u}", f"max error {u}"), (stretch_key, f"max {'wind-up' if rotary else 'belt'} {u}"),
+            *([] if rigid else [(f"residual_vibration_{u}", f"residual {report['compliance']} vib. {u}")]),
+            (f"max_error_{u}", f"max error {u}"),
+            *([] if rigid else [(stretch_key, f"max {'wind-up' if rotary else 'belt'} {u}")]),
             ("peak_torque_command_N_m", "peak torque N m"), ("torque_limited", "saturates")],
             title=f"Motion laws at {cycle_of(report).rate(report['spm'])} on the same drive")]
     if "verdict" in report:
@@ -116,7 +129,8 @@ def plot_accuracy(result: AccuracyResult, path: str | Path | None = None, motor:
     ax = axes[1]
     ax.plot(ang, result.error * scale, lw=1.4, color="k", label=f"{output} error")
     ax.plot(ang, result.servo * scale, lw=1.0, label="servo tracking")
-    ax.plot(ang, result.belt * scale, lw=1.0, label="gearbox wind-up" if axis.rotary else "belt stretch")
+    if axis.compliance != "rigid":   # a rigid drive (a crank, a linkage) has no stretch: its error is the servo's
+        ax.plot(ang, result.belt * scale, lw=1.0, label="gearbox wind-up" if axis.rotary else "belt stretch")
     ax.set_ylabel(f"error [{u}]\n(commanded - actual)")
     h_ang = 360.0 * (result.handover_time - result.loop.settings.sum_small_time_constants) / result.period
     for a in axes:

@@ -169,7 +169,9 @@ class AccuracyResult:
             "acceleration_feedforward": self.loop.settings.acceleration_feedforward,
             "gains": self.loop.gains.as_dict(),
         }
-        if axis.rotary:  # a gearbox to a turning load: its ratio, wind-up and torsional stiffness
+        if axis.compliance == "rigid":  # a crank, a linkage: its varying ratio and inertia (servo/varying.py)
+            out.update(axis.facts(scale, u))
+        elif axis.rotary:  # a gearbox to a turning load: its ratio, wind-up and torsional stiffness
             out.update({"max_stretch_deg": float(np.max(np.abs(self.belt))) * scale, "ratio": 1 / axis.radius,
                         "load_inertia_kg_m2": axis.mass, "torsional_stiffness_N_m_arcmin": axis.belt_stiffness * ARCMIN,
                         "stiffness_source": axis.belt_note, "resonance_Hz": axis.resonance_hz,
@@ -213,8 +215,10 @@ def handover_accuracy(problem, stroke=None, spm: float | None = None, *, setting
     check_sampling(settings.position_sampling, settings.control_cycle, problem.timing, spm,
                    (str(problem.file), "servo.position_sampling_us", "servo.control_cycle_us"))
     axis = axis or axis_from_problem(problem, settings)
-    loop = build_loop(axis, settings, gains)
     stroke = stroke if stroke is not None else problem.stroke(spm)
+    if axis.compliance == "rigid":   # a transmission of varying ratio: its own nonlinear dynamics
+        return _varying_accuracy(problem, stroke, spm, settings, axis, gains or tuned_gains(axis, settings), label)
+    loop = build_loop(axis, settings, gains)
     t = cycle_grid(stroke.period, settings)
     inputs = []
     for phase in TABLE_PHASES:
@@ -234,6 +238,38 @@ def handover_accuracy(problem, stroke=None, spm: float | None = None, *, setting
                                       outputs[2 * i + 1][1], tau_cmd, t_h, int(np.searchsorted(t, t_h)), quant,
                                       axis.torque_limit, loop, label or stroke.label, window,
                                       -outputs[2 * i + 1][2]))
+    return max(results, key=lambda r: r.handover_error)
+
+
+@dataclass(frozen=True)
+class RigidLoop:
+    """The loop of a rigid axis of varying ratio (servo/varying.py): what an :class:`AccuracyResult` reads of it."""
+
+    axis: object
+    settings: ServoSettings
+    gains: Gains
+
+
+def _varying_accuracy(problem, stroke, spm: float, settings, axis, gains, label: str) -> AccuracyResult:
+    """:func:`handover_accuracy` through a transmission of varying ratio (servo/varying.py): the worst of the table
+    phases, the whole error servo tracking."""
+    from .varying import simulate_varying
+
+    loop = RigidLoop(axis, settings, gains)
+    t = cycle_grid(stroke.period, settings)
+    delay = settings.sum_small_time_constants
+    s_cmd = stroke.evaluate(t - delay).s
+    t_h, window = _handover(problem, spm)
+    t_h, window = t_h + delay, (window[0] + delay, window[1] + delay)
+    quant = 2 * math.pi * axis.handover_ratio / settings.encoder_counts
+    zero = np.zeros_like(t)
+    results = []
+    for phase in TABLE_PHASES:
+        phi, tau_cmd = simulate_varying(axis, settings, gains, t, reference_signals(loop, stroke, t, phase=phase)[:3])
+        x = np.ravel(axis.transmission.transfer(phi)[0])
+        results.append(AccuracyResult(spm, stroke.period, t, s_cmd, x, s_cmd - x, zero, zero, tau_cmd, t_h,
+                                      int(np.searchsorted(t, t_h)), quant, axis.torque_limit, loop,
+                                      label or stroke.label, window, zero))
     return max(results, key=lambda r: r.handover_error)
 
 

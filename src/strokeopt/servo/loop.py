@@ -109,9 +109,10 @@ def tune(axis: DriveAxis, settings: ServoSettings) -> Gains:
             break
     if lo <= 0:
         raise SolverError(f"no speed-loop bandwidth gives a robust servo loop with this {axis.compliance} and motor")
+    why = (f"{axis.compliance} resonance {axis.resonance_hz:.0f} Hz" if axis.compliance != "rigid" else
+           "on the largest inertia over the stroke, met at the least too")
     return _rule_gains(axis, lo, f"symmetric optimum, w_c = 1/(2 T_sigma) = {wc0 / (2 * math.pi):.0f} Hz lowered "
-                                 f"for gain margin {MIN_GAIN_MARGIN:g} and modulus margin {MIN_MODULUS_MARGIN:g} "
-                                 f"({axis.compliance} resonance {axis.resonance_hz:.0f} Hz)")
+                                 f"for gain margin {MIN_GAIN_MARGIN:g} and modulus margin {MIN_MODULUS_MARGIN:g} ({why})")
 
 
 @functools.lru_cache(maxsize=64)
@@ -140,8 +141,19 @@ def open_loop(axis: DriveAxis, settings: ServoSettings, gains: Gains) -> tuple[n
 
 
 def loop_margins(axis: DriveAxis, settings: ServoSettings, gains: Gains) -> dict:
-    """Gain margin, phase margin [deg] and modulus margin (distance of the Nyquist curve to -1)."""
-    gms, pms, sms = stability_margins(*open_loop(axis, settings, gains))
+    """Gain margin, phase margin [deg] and modulus margin (distance of the Nyquist curve to -1); a rigid axis of
+    varying inertia (servo/varying.py): the worse of its least and largest inertia."""
+    if axis.compliance == "rigid":
+        from .varying import rigid_open_loop
+
+        both = [loop_margins_of(rigid_open_loop(settings, gains, j)) for j in axis.inertia_range]
+        return {k: min(m[k] for m in both) for k in both[0]}
+    return loop_margins_of(open_loop(axis, settings, gains))
+
+
+def loop_margins_of(loop: tuple) -> dict:
+    """:func:`loop_margins` of an open loop given as numerator and denominator coefficients."""
+    gms, pms, sms = stability_margins(*loop)
     # the gain may rise by the smallest factor > 1 at a phase crossover (the integrators make
     # crossovers at low frequency where the gain could only fall: those are not margins)
     up = [float(g) for g in np.atleast_1d(gms) if g > 1]
@@ -156,6 +168,8 @@ def _robust(axis: DriveAxis, settings: ServoSettings, gains: Gains) -> bool:
     if not (m["gain_margin"] >= MIN_GAIN_MARGIN and m["modulus_margin"] >= MIN_MODULUS_MARGIN
             and m["phase_margin_deg"] > 0):
         return False
+    if axis.compliance == "rigid":   # the margins at both ends of its inertia: no state space to build
+        return True
     try:
         build_loop(axis, settings, gains)
     except SolverError:
@@ -281,7 +295,6 @@ def reference_signals(loop: ServoLoop, stroke, t: np.ndarray, *, forces: bool = 
     """
     s = loop.settings
     axis = loop.axis
-    r = axis.radius
     tc = table_interval(stroke.period, s)
     d = s.sum_small_time_constants
     shift = phase * tc
@@ -291,25 +304,23 @@ def reference_signals(loop: ServoLoop, stroke, t: np.ndarray, *, forces: bool = 
     kc = np.round(t / tc).astype(int)
     k_lo = min(k.min(), kc.min()) - 1
     k_hi = max(k.max(), kc.max()) + 2
-    table = stroke.evaluate(np.arange(k_lo, k_hi + 1) * tc + shift).s  # the position table the drive reads
+    # the position table the drive reads, in motor angles
+    table = axis.motor_angle(stroke.evaluate(np.arange(k_lo, k_hi + 1) * tc + shift).s)
 
     def pos(i):
         return table[i - k_lo]
 
     w = (tt - k * tc) / tc
     p0, p1 = pos(k), pos(k + 1)
-    theta_ref = ((1 - w) * p0 + w * p1) / r
-    omega_ff = (p1 - p0) / (tc * r) if s.velocity_feedforward else 0 * t
+    theta_ref = (1 - w) * p0 + w * p1
+    omega_ff = (p1 - p0) / tc if s.velocity_feedforward else 0 * t
     # acceleration: second difference centred on the nearest table point
-    eps = (pos(kc + 1) - 2 * pos(kc) + pos(kc - 1)) / (tc * tc * r)
+    eps = (pos(kc + 1) - 2 * pos(kc) + pos(kc - 1)) / (tc * tc)
     # the external forces act where the bar is: on the commanded stroke as the loop follows it (delayed)
-    held = stroke.evaluate(t + shift - d) if forces else None
-    f_ext = axis.external_force(held.s, held.v) if forces else 0 * t
-    tau_ff = 0 * t
-    if s.acceleration_feedforward:
-        tau_ff = tau_ff + axis.total_inertia * eps
-    if s.load_feedforward if load_ff is None else load_ff:
-        tau_ff = tau_ff - r * axis.external_force(pos(kc), (pos(kc + 1) - pos(kc - 1)) / (2 * tc))
+    held = stroke.evaluate(t + shift - d) if forces and axis.compliance != "rigid" else None
+    f_ext = axis.external_force(held.s, held.v) if held is not None else 0 * t
+    tau_ff = axis.feedforward(pos(kc), (pos(kc + 1) - pos(kc - 1)) / (2 * tc), eps, s.acceleration_feedforward,
+                              s.load_feedforward if load_ff is None else load_ff)
     return np.vstack([theta_ref, omega_ff, tau_ff, f_ext])
 
 

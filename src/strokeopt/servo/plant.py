@@ -86,6 +86,18 @@ class DriveAxis:
                          [0, 0, 0, 1],
                          [k * r / m, c * r / m, -k / m, -c / m]])
 
+    def motor_angle(self, s):
+        """The motor angle [rad] of load positions ``s`` (the drive's table in motor angles)."""
+        return np.asarray(s, dtype=float) / self.radius
+
+    def feedforward(self, theta, omega, eps, acceleration: bool, load: bool) -> np.ndarray:
+        """The drive's torque feed-forward at table points (motor angle, speed, acceleration): the rigid inertia's
+        ``J_tot eps`` (``acceleration``) less the load forces' torque there (``load``)."""
+        out = self.total_inertia * np.asarray(eps, dtype=float) if acceleration else 0 * np.asarray(eps, dtype=float)
+        if load:
+            out = out - self.radius * self.external_force(self.radius * np.asarray(theta), self.radius * np.asarray(omega))
+        return out
+
     def external_force(self, s, v=None) -> np.ndarray:
         """Gravity plus the load forces on the bar [N], positive upward, along the positions ``s`` (and the
         velocities ``v``: a friction acts only where they are given -- the full simulation gives them, the
@@ -117,15 +129,18 @@ def _torsion_axis(problem, settings: ServoSettings, motor, catalogue) -> DriveAx
     """The axis of a drive without a belt: the motor, the transmission's constant ratio and the torsional
     stiffness of its gearbox or shaft at the load (``[servo] torsional_stiffness_N_m_arcmin``)."""
     file, drive, tr = str(problem.file), problem.drive, problem.transmission
-    lo, hi = tr.ratio_range(*problem.timing.position_range)   # the ratio over the stroke
-    if not hi - lo <= 1e-9 * hi:
-        raise ProblemError(file, "transmission.type", f"is {tr.name!r}: the servo model holds a constant ratio "
-                                                      f"(belt_pulley or gearbox); the ratio of a {tr.label} changes "
-                                                      "with its position")
     if motor is None:
         if drive.motor is None:
             raise ProblemError(file, "drive.motor", "name the motor of the axis (a catalogue name)")
         motor = catalogue.motor(drive.motor, (file, "drive.motor"))   # a servo motor: a stepper has no loop
+    if varies(tr, problem.timing):   # a crank, a linkage: the rigid drive's own dynamics (servo/varying.py)
+        if settings.torsional_stiffness is not None:
+            raise ProblemError(file, "servo.torsional_stiffness_N_m_arcmin",
+                               f"the servo model of a {tr.label} (its ratio changes with its position) is rigid: "
+                               "leave the torsional stiffness out")
+        from .varying import varying_axis
+
+        return varying_axis(problem, motor, torque_limit(motor, drive.limits))
     if settings.torsional_stiffness is None:
         raise ProblemError(file, "servo.torsional_stiffness_N_m_arcmin",
                            f"is required for the servo model of a {tr.label}: the torsional stiffness of the gearbox "
@@ -136,6 +151,12 @@ def _torsion_axis(problem, settings: ServoSettings, motor, catalogue) -> DriveAx
     c = 2 * settings.torsional_damping_ratio * math.sqrt(k / (1 / m + r**2 / j))
     return DriveAxis(j, r, m, k, c, torque_limit(motor, drive.limits), drive.load, motor.name,
                      "[servo] torsional_stiffness_N_m_arcmin", problem.timing.rotary, tr.label)
+
+
+def varies(transmission, timing) -> bool:
+    """Whether the ratio of ``transmission`` changes over the positions of ``timing`` (a crank, a linkage)."""
+    lo, hi = transmission.ratio_range(*timing.position_range)
+    return not hi - lo <= 1e-9 * hi
 
 
 def axis_from_problem(problem, settings: ServoSettings | None = None, *, motor=None, pulley_teeth: int | None = None,

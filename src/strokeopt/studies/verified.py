@@ -20,7 +20,7 @@ from typing import Any
 from ..contact.verify import LIMIT_FIELDS, design_verification, verify
 from ..design.compare import compare_with_laws
 from ..design.result import design_summary
-from ..design.solve import solve_design, verified_handover
+from ..design.solve import limit_of, solve_design, verified_handover
 from ..io.plain import counted
 
 
@@ -152,9 +152,13 @@ def verify_design(design, *, accuracy=None, compare: bool = False, scenes=None, 
 
 def _with_handover(design, error: float):
     """``design`` with its handover check row holding ``error`` [m] of a full simulation made now."""
-    if design.settings is None or not any(c["name"].startswith("handover accuracy") for c in design.checks):
+    if design.settings is None or (design.drive is None and not any(c["name"].startswith("handover accuracy")
+                                                                     for c in design.checks)):
         return design
-    rows = verified_handover(design.checks, error, "full servo simulation", design.settings.check_tolerance)
+    if not any(itv.handover for itv in design.problem.timing.intervals):
+        return design
+    rows = verified_handover(design.checks, error, "full servo simulation", design.settings.check_tolerance,
+                             limit_of(design.settings, design.problem))
     return replace(design, checks=rows)
 
 
