@@ -207,6 +207,7 @@ def test_in_crank_coordinates_the_load_is_the_crank_and_the_torque_the_linkage_s
     np.testing.assert_allclose(terms.total, dyn.torque / 2.0, atol=1e-7 * np.abs(dyn.torque).max())
 
 
+@pytest.mark.slow  # a solve and eight sampled machines
 def test_robust_of_the_servo_linkage_judges_what_it_has(tmp_path, capsys):
     # a link's mass scattered: the samples' peak torque (no handover, no contact model): the figure drew an empty
     # "handover error" panel with a limit in mm for a rotary load, and the "worst" samples were in index order
