@@ -75,3 +75,14 @@ def test_solve_parts_names_functions_that_exist_and_counts_own_time():
     outer()
     assert clock.calls == {"inner": 1, "outer": 1}
     assert 0.02 <= clock.own["inner"] < 0.2 and 0.01 <= clock.own["outer"] < 0.02 + 0.1
+
+
+@pytest.mark.slow  # two crank accuracies, one with CVODES (about 10 s)
+def test_the_varying_ratio_servo_s_rk4_agrees_with_cvodes():
+    """servo/varying.py's RK4 steps against CVODES at rtol 1e-10 on the crank drive: the handover errors within 0.5 %
+    (the bench prints both; its time ratio is the bench's, not a test's)."""
+    import re
+
+    result = bench.REGISTRY["servo_varying"].fn()
+    errors = [float(re.search(r"handover error ([0-9.]+) mm", r.note)[1]) for r in result.rows]
+    assert len(errors) == 2 and errors[0] == pytest.approx(errors[1], rel=5e-3) and 0 < errors[0] < 0.05

@@ -47,3 +47,39 @@ def run_command(args: list[str]) -> tuple[float, dict]:
     if done.returncode != 0:
         raise SolverError(f"strokeopt {' '.join(args[:2])} exited {done.returncode}: {done.stderr.strip()[-300:]}")
     return seconds, json.loads(done.stdout)
+
+
+@benchmark("servo_varying", "the servo loop through the crank of problems/deco2000_crank_slider.toml (rigid, its ratio "
+                            "varying): one handover accuracy (four table phases to the periodic state) with the RK4 "
+                            "steps it uses against CasADi's CVODES at rtol 1e-10, the handover errors beside")
+def _bench_servo_varying() -> BenchResult:
+    import casadi as ca
+
+    from ..files.problem_file import load_problem
+    from . import registry
+    from ..servo import varying
+    from ..servo.accuracy import handover_accuracy
+
+    problem = load_problem(registry.reference_problem_path().parent / "deco2000_crank_slider.toml")
+    handover_accuracy(problem)   # imports and the tuning's cache out of both timings
+    t0 = time.perf_counter()
+    rk = handover_accuracy(problem)
+    rk_s = time.perf_counter() - t0
+    plain = ca.integrator
+
+    def cvodes(name, plugin, dae, t0, tf, opts):
+        return plain(name, "cvodes", dae, t0, tf, {"abstol": 1e-12, "reltol": 1e-10})
+
+    varying.ca.integrator = cvodes
+    try:
+        t0 = time.perf_counter()
+        cv = handover_accuracy(problem)
+        cv_s = time.perf_counter() - t0
+    finally:
+        varying.ca.integrator = plain
+    return BenchResult(rows=[BenchRow(f"RK4, {varying.RK_STEPS} steps per grid step", rk_s,
+                                      f"handover error {rk.handover_error * 1e3:.5f} mm"),
+                             BenchRow("CVODES, rtol 1e-10", cv_s, f"handover error {cv.handover_error * 1e3:.5f} mm "
+                                      f"({100 * (rk.handover_error / cv.handover_error - 1):+.2f} % RK4 against it)")],
+                       measured_s=rk_s, ratio=cv_s / rk_s, ratio_label="CVODES / RK4", ratio_min=2.0,
+                       notes=["in this process, after one run that builds the functions and tunes the gains"])

@@ -38,8 +38,8 @@ from .lti import pade_delay
 
 #: CasADi's fixed-step Runge-Kutta (RK4) steps per step of the grid (12 per table interval: about 10 us each at
 #: 500 us). The loop's fastest pole (the delay's Pade, about pade_order / T_sigma = 6000 1/s) times the step is
-#: 0.06, far inside RK4's stability; the reference needle bar's handover error through a crank agrees with CVODES at
-#: rtol 1e-12 to 0.1 % (tests/servo/test_varying.py), five times faster.
+#: 0.06, far inside RK4's stability; the reference needle bar's handover error through a crank agrees with CVODES to
+#: about 0.1 % (`strokeopt bench --only servo_varying` prints both, and their times side by side).
 RK_STEPS = 4
 #: Cycles simulated at most before the state at the cycle's start repeats (the loop settles within a few ms; a
 #: machine cycle is tens of ms or more: two or three cycles do).
