@@ -83,6 +83,8 @@ def test_the_varying_ratio_servo_s_rk4_agrees_with_cvodes():
     (the bench prints both; its time ratio is the bench's, not a test's)."""
     import re
 
+    from strokeopt.bench import servo  # noqa: F401  (registers it)
+
     result = bench.REGISTRY["servo_varying"].fn()
     errors = [float(re.search(r"handover error ([0-9.]+) mm", r.note)[1]) for r in result.rows]
     assert len(errors) == 2 and errors[0] == pytest.approx(errors[1], rel=5e-3) and 0 < errors[0] < 0.05
