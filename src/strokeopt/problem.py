@@ -147,7 +147,7 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
     design_table = top.table("design", required=False)
     design = parse_design(design_table, rotary=timing.rotary) if design_table is not None else None
     check_contact(design.contact if design is not None else None, model, scenes, file)
-    check_free(design.free if design is not None else (), model, drive, file, transmission)
+    check_free(design.free if design is not None else (), model, drive, file, transmission, timing.position_range)
     servo_table = top.table("servo", required=False)
     servo = parse_servo(servo_table, timing, spm, transmission) if servo_table is not None else None
     if top.has("synthesis") and (top.raw("synthesis") is None or transmission.name != "linkage"):

@@ -122,6 +122,11 @@ def test_a_free_radius_is_the_same_crank_as_a_stated_one():
      "shorter than the rod (80 mm)"),
     ("design.free.transmission.crank_radius_mm=[20, 18]", "design.free.transmission.crank_radius_mm",
      "0 < lower <= upper"),
+    # a bound that cannot carry the stroke: refused before the NLP meets it (its acos has no derivative there)
+    ("design.free.transmission.crank_radius_mm=[10, 30]", "design.free.transmission.crank_radius_mm",
+     "at 10 mm the position 35 mm is outside"),
+    ("design.free.transmission.crank_radius_mm=[5, 10]", "design.free.transmission.crank_radius_mm",
+     "no radius of the bounds carries the stroke"),
     ("design.free.transmission.crank_radius_mm=20", "design.free.transmission.crank_radius_mm",
      "needs bounds [lower, upper]"),
 ])

@@ -43,11 +43,11 @@ def test_linkage_text(capsys):
     # a dyad's quality in degrees against the file's limit (min_transmission_index 0.05 = sin 2.9 deg), the classic
     # guidance (40 deg, 30 at worst) warned of with the force it costs (1 / sin 4.72 deg = 12.1)
     assert ("transmission angle of the dyad coupler5, needle_rocker6: least 4.7 deg at 322 deg (Alt's; index 0.082); "
-            "limit 2.9 deg (the file's min_transmission_index 0.05): ok") in text
+            "the file's limit 2.9 deg (min_transmission_index 0.05): ok") in text
     assert "WARNING: 4.7 deg is below the classic guidance" in text and "12.1 times" in text
     assert "least 68.0 deg" in text and text.count("below the classic guidance") == 1
     # the needle four-bar sits 0.0567 mm from a change point (s + l = p + q): warned; the first is 30 mm away
-    assert "WARNING: this loop is 0.0567 mm from a change point" in text and text.count("from a change point") == 1
+    assert "WARNING: loop C-O4-O6-D is 0.0567 mm from a change point" in text and text.count("from a change point") == 1
 
 
 def test_the_json_states_the_change_point_distance_and_the_classic_guidance(capsys):

@@ -30,6 +30,9 @@ def solve_once(args, problem, progress=None, scenes=None):
                   f"the problem's {problem.transmission.name}" + (f" of ratio {problem.transmission.ratio:g}"
                                                                   if hasattr(problem.transmission, "ratio") else ""))
         chosen["from"] = f"the solve's choice: design.motor_choice = {problem.design.motor_choice}, {pulley}"
+    for row in design.free_parameters:   # a transmission's field the solve chose with the stroke (a crank radius)
+        if row["parameter"].startswith("transmission."):
+            chosen["from"] += f"; {row['parameter']} = {row['value']:.5g} chosen"
     return verified, chosen
 
 

@@ -62,7 +62,7 @@ class CrankSlider(Transmission):
         # the field to name: one the user set (--set) among those that place the travel, else the dead centre
         placing = ("crank_radius_mm", "rod_length_mm", "direction", "dead_centre_mm")
         key = next((k for k in placing if fields.where(k) in fields.overridden), "dead_centre_mm")
-        check_reach(tr, fields, key, timing, "move the dead centre or lengthen the crank")
+        check_reach(tr, fields, key, timing, "move the dead centre or change the crank radius")
         fields.finish()
         return tr
 
@@ -70,10 +70,20 @@ class CrankSlider(Transmission):
     #: rod's length and the crank's inertia stay as stated
     free_fields = {"crank_radius_mm": ("r", 1e-3)}
 
-    def free_error(self, key: str, lower: float, upper: float) -> str | None:
+    def free_error(self, key: str, lower: float, upper: float, positions: tuple[float, float]) -> str | None:
+        """The radius within the plausible range and shorter than the rod, and every radius of the bounds able to
+        carry the stroke (kept :data:`DEAD_CENTRE_MARGIN_DEG` from the dead centres): the NLP starts nowhere else."""
         if not (1.0 <= lower and upper * 1e-3 < self.l):
             return (f"bounds {lower:g}..{upper:g} mm: a crank radius of at least 1 mm and shorter than the rod "
                     f"({self.l * 1e3:g} mm)")
+
+        def reach(r):
+            return self.with_free({key: r}).range_error(*positions)
+
+        for r in (lower, upper):
+            why = reach(r)
+            if why is not None:
+                return f"bounds {lower:g}..{upper:g} mm: at {r:g} mm {why}" + _reaching(reach, lower, upper)
         return None
 
     def reach_rows(self, x_min, x_max) -> list:
@@ -119,3 +129,12 @@ class CrankSlider(Transmission):
     def __repr__(self) -> str:
         return (f"CrankSlider(crank_radius={self.r * 1e3:g} mm, rod_length={self.l * 1e3:g} mm, "
                 f"dead_centre={self.dead_centre * 1e3:g} mm)")
+
+
+def _reaching(reach, lower: float, upper: float) -> str:
+    """Where within ``lower..upper`` [mm] the radii that carry the stroke lie (``reach(r)`` None), for a message."""
+    grid = [lower + (upper - lower) * k / 200 for k in range(201)]
+    ok = [r for r in grid if reach(r) is None]
+    if not ok:
+        return "; no radius of the bounds carries the stroke"
+    return f"; the radii of the bounds that carry it: about {ok[0]:.4g}..{ok[-1]:.4g} mm"

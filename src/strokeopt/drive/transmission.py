@@ -59,8 +59,9 @@ class Transmission:
     #: (attribute, factor from the file's unit to SI); a constant-ratio belt's radius is ``design.pulley``'s
     free_fields: dict = {}
 
-    def free_error(self, key: str, lower: float, upper: float) -> str | None:
-        """Why the bounds ``lower..upper`` (the file's unit) of the free field ``key`` do not fit, or None."""
+    def free_error(self, key: str, lower: float, upper: float, positions: tuple[float, float]) -> str | None:
+        """Why the bounds ``lower..upper`` (the file's unit) of the free field ``key`` do not fit the load positions
+        ``positions`` (the least and largest of [timing], m), or None."""
         return None
 
     def with_free(self, values: dict) -> "Transmission":

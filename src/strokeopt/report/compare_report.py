@@ -227,9 +227,13 @@ def compare_report(datas: list[ReportData]) -> str:
     built["drive"] = _table(names, rows)
     acc = [d.accuracy.summary() if d.accuracy is not None else None for d in datas]
     rows = [_row("handover error [mm]", [a and a["handover_error_mm"] for a in acc], "accuracy.handover_error_mm", LOWER)]
-    for k in ("servo_tracking", "belt_stretch"):
-        rows.append(_row(f"{k.replace('_', ' ')} [mm]", [a and a["signed_contributions_mm"][k] for a in acc], None))
-    rows.append(_row("residual belt vibration [mm]", [a and a["residual_vibration_mm"] for a in acc], None, LOWER))
+    elastic = [a and a["compliance"] != "rigid" for a in acc]   # a rigid drive (a crank) has no stretch: "-"
+    rows.append(_row("servo tracking [mm]", [a and a["signed_contributions_mm"]["servo_tracking"] for a in acc], None))
+    rows.append(_row("belt stretch [mm]", [a["signed_contributions_mm"]["belt_stretch"] if e else None
+                                           for a, e in zip(acc, elastic)], None))
+    rows.append(_row("encoder (one count) [mm]", [a and a["contributions_mm"]["encoder_quantisation"] for a in acc], None))
+    rows.append(_row("residual belt vibration [mm]", [a["residual_vibration_mm"] if e else None
+                                                      for a, e in zip(acc, elastic)], None, LOWER))
     built["accuracy"] = _table(names, rows)
     built["verification"] = _section_verification(datas, names, machine)
     rows = [_row("mesh intervals x degree", [f"{s['mesh']['intervals']} x {s['mesh']['degree']}" for s in S], None),

@@ -25,7 +25,8 @@ def sizing_verdict(sizing) -> str:
     if best.stepper:
         return stepper_verdict(best)
     b = best.check(best.binding)
-    what = (f"{b.name} {b.value:.4g} {b.unit} against the limit {b.limit:.4g} {b.unit} "
+    unit = "" if b.unit in ("", "-") else f" {b.unit}"   # a ratio has no unit to print
+    what = (f"{b.name} {b.value:.4g}{unit} against the limit {b.limit:.4g}{unit} "
             f"(margin {b.margin:.3g})")
     if best.feasible:
         on = f"a {best.pulley.teeth}-tooth pulley" if best.pulley.teeth is not None else f"the {best.pulley.name}"

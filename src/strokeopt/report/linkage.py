@@ -26,7 +26,8 @@ def linkage_text(s: dict) -> str:
         lines.append(f"  four-bar loop {'-'.join(f['joints'])} ({', '.join(f['links'])}): {f['grashof']}, "
                      f"{f['class']} relative to {f['relative_to']}")
         if f.get("near_change_point"):
-            lines.append(f"  WARNING: this loop is {f['change_point_distance_mm']:.3g} mm from a change point (shortest + "
+            lines.append(f"  WARNING: loop {'-'.join(f['joints'])} is {f['change_point_distance_mm']:.3g} mm from a change "
+                         "point (shortest + "
                          "longest = sum of the other two): a link tolerance of that size can let it fold onto a line "
                          "and pass into its other branch (toggle)")
     c = s["closure"]
@@ -41,8 +42,8 @@ def linkage_text(s: dict) -> str:
             angle = t["min_transmission_angle_deg"]
             limit = math.degrees(math.asin(min(1.0, t["limit"])))
             lines.append(f"transmission angle of the {t['group']} {', '.join(t['links'])}: least {angle:.1f} deg at "
-                         f"{t['at_deg']:g} deg (Alt's; index {t['min_index']:.3f}); limit {limit:.1f} deg (the file's "
-                         f"min_transmission_index {t['limit']:g}): {verdict}")
+                         f"{t['at_deg']:g} deg (Alt's; index {t['min_index']:.3f}); the file's limit {limit:.1f} deg "
+                         f"(min_transmission_index {t['limit']:g}): {verdict}")
             if t.get("below_classic_guidance"):
                 lines.append(f"  WARNING: {angle:.1f} deg is below the classic guidance for a transmission angle "
                              f"({CLASSIC_TRANSMISSION_ANGLE_DEG[0]:g} deg, {CLASSIC_TRANSMISSION_ANGLE_DEG[1]:g} at "

@@ -58,7 +58,10 @@ def accuracy_text(report: dict) -> str:
     used = report.get("drive")
     if used:
         lines.append(drive_text(used))
-    if used and used["from"].startswith("the design file"):
+    if used and used["from"].startswith("the design file") and report.get("compliance") == "rigid":
+        lines.append("  note: a transmission of varying ratio has no linear design term: the solve checks the design "
+                     "by this simulation (the design does not hold it while it optimises)")
+    elif used and used["from"].startswith("the design file"):
         # The design's handover term is this simulation's error as a linear functional of the stroke (the
         # sampled table, the window's instants, the load forces linearised about the solve's start: servo/
         # table_term.py); here the loop is simulated in full, so the two agree to the linearisation's error.

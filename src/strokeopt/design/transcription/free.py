@@ -32,14 +32,14 @@ FIELD = "design.free"
 TRANSMISSION = "transmission."
 
 
-def check_free(free: tuple, model, drive, file: str, transmission=None) -> None:
+def check_free(free: tuple, model, drive, file: str, transmission=None, positions=(0.0, 0.0)) -> None:
     """Every ``[design.free.<element>]`` names a linear spring or contact of ``[model]`` (ProblemError), and no
     drive load force states that spring's numbers itself (it must take them: ``model_spring``); every field of
     ``[design.free.transmission]`` is one the transmission offers, within bounds it can take, on a drive."""
     for name, lo, hi in free:
         fld = f"{FIELD}.{name}"
         if name.startswith(TRANSMISSION):
-            _check_transmission(fld, name[len(TRANSMISSION):], lo, hi, transmission, drive, file)
+            _check_transmission(fld, name[len(TRANSMISSION):], lo, hi, transmission, drive, file, positions)
             continue
         if model is None:
             raise ProblemError(file, fld, "the problem has no [model] section")
@@ -58,7 +58,8 @@ def check_free(free: tuple, model, drive, file: str, transmission=None) -> None:
                                                               f"(model_spring = \"{name}\") so both move together")
 
 
-def _check_transmission(fld: str, key: str, lo: float, hi: float, transmission, drive, file: str) -> None:
+def _check_transmission(fld: str, key: str, lo: float, hi: float, transmission, drive, file: str,
+                        positions: tuple) -> None:
     offered = getattr(transmission, "free_fields", {})
     if key not in offered:
         name = getattr(transmission, "name", "transmission")
@@ -67,7 +68,7 @@ def _check_transmission(fld: str, key: str, lo: float, hi: float, transmission, 
             " (a belt pulley's radius is [design] pulley = \"continuous\" or \"catalogue\")"))
     if drive is None:
         raise ProblemError(file, fld, "a free transmission field is chosen for the drive: the problem has no [drive]")
-    why = transmission.free_error(key, lo, hi)
+    why = transmission.free_error(key, lo, hi, positions)
     if why is not None:
         raise ProblemError(file, fld, why)
 
