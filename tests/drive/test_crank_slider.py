@@ -182,8 +182,9 @@ def test_design_through_the_crank_holds_the_torque_of_the_textbook_crank():
 
 @pytest.mark.slow
 def test_belt_or_crank_is_one_compare(reference_written, tmp_path, capsys):
-    """`strokeopt solve` writes the crank design with its verdict (no handover accuracy: no servo model of a crank
-    yet, said, not passed); `strokeopt compare` sets it beside the reference's belt design."""
+    """`strokeopt solve` writes the crank design with its verdict, its handover accuracy from the full simulation of
+    the rigid drive (servo/varying.py) and its report; `strokeopt compare` sets it beside the reference's belt
+    design."""
     import json
 
     from strokeopt.cli.main import main
@@ -193,7 +194,12 @@ def test_belt_or_crank_is_one_compare(reference_written, tmp_path, capsys):
                  "--plot", "none", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["drive"]["transmission"] == "crank_slider" and summary["drive"]["pulley_teeth"] is None
-    assert "handover accuracy" not in summary["verdict"].split("met:")[-1]
+    assert "transmission.crank_radius_mm = " in summary["drive"]["from"]           # the radius it chose, named
+    # the handover checked by the full simulation of the rigid drive (no design term), and the page written
+    row = next(c for c in summary["checks"] if c["name"].startswith("handover accuracy"))
+    assert row["design_term"] is None and row["ok"] and 0 < row["value"] < 0.05
+    assert "handover accuracy (full servo simulation)" in (out / "report.html").read_text(encoding="utf-8")
+    assert "handover error" in summary["verdict"].split("met:")[-1]
     html = tmp_path / "belt_or_crank.html"
     assert main(["compare", str(reference_written.design_json), str(out / "design.json"), "--out", str(html),
                  "--json"]) == 0
