@@ -129,7 +129,7 @@ def varying_axis(problem, motor, torque_limit: float) -> VaryingAxis:
     _, j, _ = inverse.map(len(phi))(phi[None, :], np.zeros((1, len(phi))), np.zeros((1, len(phi))))
     j = np.ravel(np.asarray(j, dtype=float))
     handover = next((itv for itv in timing.intervals if itv.handover), None)
-    at = handover.start_position + handover.stroke if handover is not None else lo
+    at = handover.end_position if handover is not None else lo
     _, mu, _ = tr.transfer(np.atleast_1d(tr.motor_angle(np.atleast_1d(at))))
     return VaryingAxis(tr, motor.rotor_inertia, load, torque_limit, motor.name, timing.rotary,
                        (float(j.min()), float(j.max())), float(abs(np.ravel(mu)[0])))
