@@ -43,6 +43,7 @@ def test_robust_of_the_six_bar_scatters_its_swing_and_dwell(capsys, tmp_path):
     # the rear near-dwell and the crank torque are reported per sample; the index stays above its limit 0.15
     assert {"sley_D_dwell_at_maximum_deg", "min_transmission_index", "crank_torque_peak_N_m"} <= set(out["responses"])
     assert out["yield"] == 1.0 and min(r["min_transmission_index"] for r in rows) > 0.15
+    assert out["criteria"] == ["transmission index"] and out["not_judged"] == []   # what the yield counts
 
 
 def test_robust_refuses_what_a_stated_machine_cannot_scatter(capsys):

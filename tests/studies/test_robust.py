@@ -81,6 +81,7 @@ def test_study_is_reproducible_and_matches_the_full_simulation(tmp_path, capsys)
     assert first["rows"] == again["rows"] and first["yield"] == again["yield"]  # same seed, same numbers
     # the yield counts what is judged: the lag and impact velocity (no [design.contact] limits) are named beside it
     # with their range over the samples; set the limits and they are judged (and counted)
+    assert first["criteria"] == ["handover accuracy", "premature release", "peak_torque", "rms_torque"]
     named = {c["criterion"]: c for c in first["not_judged"]}
     assert set(named) == {"lag", "impact velocity"}
     lags = [r["max_lag_mm"] for r in first["rows"]]

@@ -27,7 +27,8 @@ def robust_text(report: dict) -> str:
               for t in report["tolerances"]]
     if report.get("runner"):   # where it ran, and any worker lost on the way (its samples re-run on the others)
         lines.append(f"ran on: {report['runner']}")
-    lines.append(f"yield: {100 * report['yield']:.1f} % meet every limit the problem sets (95 % interval "
+    counted = f": {', '.join(report['criteria'])}" if report.get("criteria") else ""
+    lines.append(f"yield: {100 * report['yield']:.1f} % meet every limit the problem sets{counted} (95 % interval "
                  f"{100 * lo:.1f} to {100 * hi:.1f} %)")
     for c in report.get("not_judged", ()):   # what the yield does not count: no limit judges it
         values = (f" {c['low']:.4g} to {c['high']:.4g} {c['unit']}" if c["low"] is not None else "")

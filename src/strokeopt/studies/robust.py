@@ -207,7 +207,7 @@ def judge_stated(problem, overrides: list[str]) -> dict:
     sampled = problem.with_overrides(overrides)
     own = sampled.transmission.analysis(sampled, with_dynamics=True)
     failed = [] if own["status"] == "ok" else ["transmission index"]
-    return {**own["measures"], "ok": not failed, "failed": failed}
+    return {**own["measures"], "ok": not failed, "failed": failed, "criteria": ["transmission index"]}
 
 
 #: The contact scene of a sample: the default integration without locating each peak force between the output
@@ -231,16 +231,18 @@ def judge_sample(design, overrides: list[str]) -> dict:
         include_pulley_inertia=getattr(design.settings, "include_pulley_inertia", True))
     sampled = replace(design, problem=problem, drive=drive, verification=None, status="optimal")
     verified = verify_design(sampled, options=SAMPLE_SCENE_OPTIONS)
-    row, failed, unjudged = {}, [], []
+    row, failed, unjudged, judged = {}, [], [], []
     if verified.accuracy is None and any(itv.handover for itv in problem.timing.intervals):
         unjudged.append("handover accuracy")   # no servo model: the design's note says why
     if verified.accuracy is not None:
         scale, unit = error_unit(problem.timing.rotary)   # mm on a linear load, deg on a rotary one
         row[f"handover_error_{unit}"] = verified.accuracy.handover_error * scale
         # the verified design's own row: the one pass rule within the design's check tolerance (verified_handover)
-        judged = next((c for c in verified.design.checks if c["name"].startswith("handover accuracy")), None)
-        if judged is not None and not judged["ok"]:
-            failed.append("handover accuracy")
+        held = next((c for c in verified.design.checks if c["name"].startswith("handover accuracy")), None)
+        if held is not None:
+            judged.append("handover accuracy")
+            if not held["ok"]:
+                failed.append("handover accuracy")
     for c in (verified.verification or {}).get("criteria", []):
         key = {"lag": "max_lag_mm", "impact velocity": "impact_velocity_m_s",
                "premature release": "premature_release"}.get(c["criterion"])
@@ -250,12 +252,15 @@ def judge_sample(design, overrides: list[str]) -> dict:
             failed.append(c["criterion"])
         if c["ok"] is None and c["criterion"] in NOT_JUDGED:
             unjudged.append(c["criterion"])
+        elif c["ok"] is not None and c["criterion"] != "handover accuracy":
+            judged.append(c["criterion"])
     for check in _drive_checks(sampled):
         if check.name in DRIVE_RESULTS:
             row[DRIVE_RESULTS[check.name]] = float(check.value)
+            judged.append(check.name)
             if not check.ok:
                 failed.append(check.name)
-    row.update(ok=not failed, failed=failed, not_judged=unjudged)
+    row.update(ok=not failed, failed=failed, not_judged=unjudged, criteria=judged)
     return row
 
 
@@ -352,4 +357,5 @@ def summarise(rows: list[dict], tolerances: list[Tolerance], problem, spm: float
                                           "upper": t.bounds[1], "distribution": t.distribution} for t in tolerances],
             "yield": good / n if n else 0.0, "yield_interval": [lo, hi], "failed_by": failed_by,
             "not_judged": unjudged_summary(rows),
+            "criteria": list(dict.fromkeys(c for r in rows for c in r.get("criteria", ()))),   # what the yield counts
             "worst": worst, "sensitivity": sens, "rows": rows}
