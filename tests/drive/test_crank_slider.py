@@ -5,6 +5,7 @@ needle bar designed through it (problems/deco2000_crank_slider.toml)."""
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -206,5 +207,6 @@ def test_belt_or_crank_is_one_compare(reference_written, tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["status"] == "ok"
     text = html.read_text(encoding="utf-8")
     assert "crank and connecting rod" in text and "24-tooth pulley" in text
+    assert re.search(r"crank radius (19|2\d)\.\d+ mm, connecting rod length 80\.00 mm", text)   # the radius it chose
     assert f"{summary['objective_value']:.4g}" in text and "0.8596" in text      # both peaks side by side
     assert summary["objective_value"] > 0.8596

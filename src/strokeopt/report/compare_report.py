@@ -106,6 +106,17 @@ def _shown(value) -> str:
     return h.format_value(value) if not isinstance(value, str) else value
 
 
+def _dimensions(transmission) -> str:
+    """A transmission's own dimensions as the design has them (a crank radius the solve chose among them), for the
+    drive row: '; crank radius 20.31 mm, connecting rod length 80 mm'; nothing for a pulley (its row says it)."""
+    facts = [] if hasattr(transmission, "radius") else transmission.facts()
+    shown = []
+    for label, value in facts:
+        name, _, unit = label.partition(" [")
+        shown.append(f"{name} {h.format_value(value)}" + (f" {unit.rstrip(']')}" if unit else ""))
+    return "; " + ", ".join(shown) if shown else ""
+
+
 def _row(label: str, values: list, key: str | None, better: int = NEITHER, active: list | None = None) -> list[str]:
     """One table row: a cell per design; where the row has a direction, the best one marked when the values
     differ as printed (a difference below the printed precision is a tie) and no design's value is a margin
@@ -189,7 +200,7 @@ def compare_report(datas: list[ReportData]) -> str:
     rows = [_row("problem", [s["problem"] for s in S], None), _row("objective", [s["objective"] for s in S], "objective"),
             _row("status", [s["status"] for s in S], "status"), _row(f"{cycle.rate_name} [{cycle.rate_unit}]", [s["spm"] for s in S], "spm"),
             _row("cam cycle [s]", [s["cycle_time_s"] for s in S], "cycle_time_s"),
-            _row("drive", [drive_text(d.machine, s) for d, s in zip(datas, S)], None),
+            _row("drive", [drive_text(d.machine, s) + _dimensions(d.problem.transmission) for d, s in zip(datas, S)], None),
             _row("--set", ["; ".join(getattr(d.problem, "overrides", ())) or "none" for d in datas], None)]
     built["problem"] = _table(names, rows)
     if len({(s["objective"], s["objective_unit"]) for s in S}) == 1:   # one quantity: numbers in one row
