@@ -13,6 +13,9 @@ from pathlib import Path
 import matplotlib
 import pytest
 
+#: the full suite's: its fixtures solve, verify and report two more machines (about 25 s on each worker that runs one)
+pytestmark = pytest.mark.slow
+
 matplotlib.use("Agg")
 
 ROOT = Path(__file__).resolve().parents[2]
