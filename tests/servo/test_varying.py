@@ -59,7 +59,10 @@ def test_the_crank_s_loop_is_tuned_for_its_inertia_range():
     assert margins["gain_margin"] >= 2 and margins["modulus_margin"] >= 0.5 - 1e-3
     result = handover_accuracy(crank)
     assert result.quantisation == pytest.approx(2 * math.pi * axis.handover_ratio / settings.encoder_counts)
-    assert np.all(result.belt == 0) and result.error == pytest.approx(result.servo)
+    # the long lower dwell (120-200 deg): the loop settles to the commanded position against the bar's spring (the
+    # integral action and the load feed-forward), a thousandth of the moves' largest error
+    dwell = (result.angle_deg > 120) & (result.angle_deg < 200)
+    assert np.abs(result.error[dwell]).max() < 1e-3 * np.abs(result.error).max()
     assert 0 < result.handover_error < 0.05e-3               # a few um: the crank is near its dead centre there
 
 
@@ -67,7 +70,9 @@ def test_accuracy_of_the_crank_from_the_command_line(capsys):
     assert main(["accuracy", str(CRANK), "--json", "--plot", "none"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["status"] == "ok" and out["compliance"] == "rigid" and out["transmission"] == "crank_slider"
-    assert out["contributions_mm"]["belt_stretch"] == 0.0 and len(out["inertia_range_kg_m2"]) == 2
+    lo, hi = out["inertia_range_kg_m2"]
+    assert 0 < lo < hi and out["handover_error_mm"] == pytest.approx(
+        out["contributions_mm"]["servo_tracking"] + out["contributions_mm"]["encoder_quantisation"], rel=1e-9)
     assert main(["accuracy", str(CRANK), "--plot", "none"]) == 0
     text = capsys.readouterr().out
     assert "crank and connecting rod (rigid)" in text and "belt" not in text.split("verdict")[0].lower()
