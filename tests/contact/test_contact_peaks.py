@@ -33,7 +33,7 @@ def _show(name, loose, tight):
         print(f"  {key:6s} {loose[key]:10.1f} {value:10.1f}  ({100 * (loose[key] / value - 1) if value else 0:+.2f} %)")
 
 
-def _within(loose, tight, share=0.05):
+def _within(loose, tight, share=0.01):
     return {k: (loose[k], v) for k, v in tight.items() if abs(loose[k] - v) > share * max(v, 1.0)}
 
 
@@ -47,7 +47,7 @@ def release_500(problem):
     return simulate_scene(problem, "release", 500), simulate_scene(problem, "release", 500, options=REFERENCE)
 
 
-def test_release_peaks_at_the_default_tolerance_within_5_pct_of_1e_10(release_500):
+def test_release_peaks_at_the_default_tolerance_within_1_pct_of_1e_10(release_500):
     loose, tight = release_500
     a, b = _peaks(loose), _peaks(tight)
     _show("release, 500 spm", a, b)
@@ -76,20 +76,27 @@ def test_peaks_are_at_least_the_grid_maxima_and_say_where(release_500):
     assert m["peak_drive_force_angle_deg"] == pytest.approx(m["peak_contact_force_angles_deg"]["c21"], abs=0.01)
 
 
-def test_each_peak_has_an_error_estimate(release_500):
-    m = release_500[0].metrics
+def test_each_peak_has_an_error_estimate_that_bounds_its_error(release_500):
+    loose, tight = release_500
+    m = loose.metrics
     assert m["peak_forces_converged"] is True and m["unconverged_peaks"] == ()
-    assert all(0 <= v < 5 for v in m["peak_contact_force_errors_pct"].values())
-    assert 0 <= m["peak_drive_force_error_pct"] < 5
+    errors = {**m["peak_contact_force_errors_pct"], "drive": m["peak_drive_force_error_pct"]}
+    assert all(0 <= v <= 1 for v in errors.values())
+    # the estimate is the error against rtol 1e-10, not a number that only agrees with itself: each peak's error
+    # is within its estimate plus a tenth of a per cent (the reference's own)
+    a, b = _peaks(loose), _peaks(tight)
+    for key, value in b.items():
+        assert abs(a[key] - value) <= (errors[key] + 0.1) / 100 * value + 1e-6, key
 
 
 def test_a_peak_that_is_not_converged_is_named(problem):
-    # rtol 1e-3: the tighter re-run of k3's window moves its peak by 10.6 %
+    # rtol 1e-3: k3's peak is 6.9 % high and c31's 13 % (against rtol 1e-10: 13.334 and 1518.9 N); both estimated
+    # above 1 %
     m = simulate_scene(problem, "release", 500, options=SimulationOptions(rtol=1e-3, atol=1e-4)).metrics
     assert m["peak_forces_converged"] is False
-    assert "k3" in m["unconverged_peaks"]
-    assert m["peak_contact_force_errors_pct"]["k3"] > 5
-    assert all(m["peak_contact_force_errors_pct"].get(k, m["peak_drive_force_error_pct"]) > 5
+    assert {"k3", "c31"} <= set(m["unconverged_peaks"])
+    assert m["peak_contact_force_errors_pct"]["k3"] > 5 and m["peak_contact_force_errors_pct"]["c31"] > 10
+    assert all(m["peak_contact_force_errors_pct"].get(k, m["peak_drive_force_error_pct"]) > 1
                for k in m["unconverged_peaks"])
 
 
@@ -104,30 +111,6 @@ def test_the_json_report_says_whether_the_peaks_converged(reference_path, capsys
     assert main(args + ["--rtol", "1e-3", "--atol", "1e-4"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["peak_forces_converged"] is False and "k3" in data["unconverged_peaks"]
-
-
-HARD = [  # tests/contact/test_simulate.py's hard cases, and the reference at 600 spm
-    ("release 600 spm", "release", 600, []),
-    ("1200 spm, whole bar", "handover", 1200, []),
-    ("1e9 N/m on the 0.2 g needle, zero gap c45 at the start", "handover", 600, []),
-    # gap N 9 mm with it: the chain shell -> cage -> control -> pad reaches 32 mm, the stroke's travel (with
-    # gap N 7.4 mm it would end 1.6 mm deep in the pad, refused on read: contact/travel.py)
-    ("zero gap P: cage held on both sides", "release", 600,
-     ["model.contacts.c13.gap_mm=0.0", "model.contacts.c32.gap_mm=9.0"]),
-    ("very soft pad", "release", 600, ["model.force_laws.pad_65ShA.coefficients_SI=[0.0, 2e4]"]),
-]
-
-
-@pytest.mark.slow  # rtol 1e-10: 3-15 s each
-@pytest.mark.parametrize("name, scene, spm, overrides", HARD, ids=[h[0] for h in HARD])
-def test_hard_cases_peaks_within_5_pct_of_1e_10(reference_path, name, scene, spm, overrides):
-    p = load_problem(reference_path, overrides)
-    loose = simulate_scene(p, scene, spm)
-    tight = simulate_scene(p, scene, spm, options=REFERENCE)
-    a, b = _peaks(loose), _peaks(tight)
-    _show(name, a, b)
-    assert not _within(a, b)
-    assert loose.metrics["peak_forces_converged"] is True
 
 
 # --------------------------------------------------------------------------- the time budget of a scene
@@ -151,22 +134,10 @@ def test_contacts_too_stiff_for_the_budget_are_refused_at_once(reference_path, c
     assert len(err.splitlines()) == 1 and "raise scenes.handover.max_steps" in err
 
 
-@pytest.mark.slow  # runs to its budget: 3-6 s of CPU
-def test_a_stiff_scene_stops_at_its_budget_naming_its_stiffest_contact(reference_path, capsys):
-    # 1e11 N/m: a contact period of 2.8e-7 s passes the check, but the scene needs more than its million steps
-    sets = [s.replace("1e12", "1e11") for s in STIFF]
-    p = load_problem(reference_path, sets)
-    t0 = time.process_time()
-    with pytest.raises(SolverError, match=r"stopped after 1,000,000 integrator steps .* its stiffest contact c35 "
-                                          r"\(1e\+11 N/m on the 0.2 g needle"):
-        simulate_scene(p, "handover")
-    assert time.process_time() - t0 < 30
-
-
 def test_the_budget_is_a_validated_field(reference_path, problem, capsys):
     assert problem.scenes["release"].max_steps == 1_000_000
     p = load_problem(reference_path, ["scenes.release.max_steps=20000"])  # the scene takes 22 600
-    with pytest.raises(SolverError, match=r"stopped after 20,000 integrator steps \(its budget: "
+    with pytest.raises(SolverError, match=r"stopped after 19,\d{3} integrator steps \(its budget: 20,000, "
                                           r"scenes.release.max_steps\).*stiffest contact c13"):
         simulate_scene(p, "release", 500)
     assert main(["simulate", str(reference_path), "--scene", "release", "--plot", "none",
@@ -183,10 +154,14 @@ def test_the_budget_is_a_validated_field(reference_path, problem, capsys):
 def test_a_tighter_tolerance_gets_a_larger_budget(problem):
     sc = problem.scenes["release"]
     assert sc.step_budget(1e-5) == sc.step_budget(1e-3) == 1_000_000
-    assert sc.step_budget(1e-8) == pytest.approx(10_000_000, rel=1e-6)
-    with pytest.raises(SolverError, match="the max_steps option"):
+    # (1e-5 / rtol)^(1/3), the steps BDF of order 2 takes, up to 4 times the budget (tests/contact/test_hard_cases.py:
+    # a scene too stiff for it is refused at rtol 1e-8 about as soon as at the default)
+    assert sc.step_budget(1e-6) == pytest.approx(2_154_434, rel=1e-6)
+    assert sc.step_budget(1e-8) == sc.step_budget(1e-10) == 4_000_000
+    with pytest.raises(SolverError, match=r"its budget: 20,000, the max_steps option"):
         simulate_scene(problem, "release", 500, options=SimulationOptions(max_steps=20_000))
-    with pytest.raises(SolverError, match="stopped after 20,000 integrator steps"):  # restarted at every switch
+    # restarted at every switch: the budget is checked after each stroke piece (45 891 steps by the end of the third)
+    with pytest.raises(SolverError, match=r"stopped after [\d,]+ integrator steps \(its budget: 20,000, the max_steps"):
         simulate_scene(problem, "release", 500, options=SimulationOptions(max_steps=20_000, restart_at_switches=True))
 
 

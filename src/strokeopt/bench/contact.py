@@ -15,10 +15,11 @@ from functools import partial
 import casadi as ca
 import numpy as np
 
-from ..contact.simulate import REFINE_POINTS, SceneResult, SimulationOptions, integrate_scene, simulate_scene
+from ..contact.simulate import SceneResult, SimulationOptions, integrate_scene, simulate_scene
+from ..contact.stepper import REFINE_POINTS
 from ..errors import SolverError
 from ..files.problem_file import load_problem
-from .registry import BenchResult, BenchRow, benchmark, reference_problem_path
+from .registry import BenchResult, BenchRow, benchmark, best_time, reference_problem_path
 
 
 BENCH_ACCURACY_M_S = 1e-3  # impact velocity accuracy both integrators must reach
@@ -131,3 +132,47 @@ def _bench_simulate_step() -> BenchResult:
                  "clearances); only the integrator differs")
     return BenchResult(rows=rows, measured_s=fast, ratio=slow / fast, ratio_label="scipy Radau / CasADi CVODES (CPU)",
                        notes=notes)
+
+
+@benchmark("simulate_peaks", "the release scene at 1200 spm: its peak forces located between the output points with "
+                             "an error estimate each (re-integrated at 1/100 of the tolerances from its stroke piece's "
+                             "start) against the same cycle without them")
+def _bench_simulate_peaks() -> BenchResult:
+    problem = load_problem(reference_problem_path())
+    with_peaks = best_time(lambda: simulate_scene(problem, "release", 1200.0), repeat=3)
+    without = best_time(lambda: simulate_scene(problem, "release", 1200.0, options=SimulationOptions(peaks=False)),
+                        repeat=3)
+    r = simulate_scene(problem, "release", 1200.0)
+    m = r.metrics
+    worst = max(m["peak_contact_force_errors_pct"].items(), key=lambda kv: kv[1])
+    return BenchResult(rows=[BenchRow("peaks located and estimated", with_peaks,
+                                      f"{r.stats['peak_refinements']} output intervals refined; largest estimate "
+                                      f"{worst[1]:.2g} % ({worst[0]})"),
+                             BenchRow("the cycle alone (grid maxima)", without)],
+                       measured_s=with_peaks, ratio=with_peaks / without, ratio_label="with peaks / without",
+                       notes=["target: the peaks and their estimates at most 3x the cycle alone"], ratio_max=3.0)
+
+
+#: every contact of the handover scene at 1e11 N/m (100 times the file's): too stiff for its step budget
+STIFF_SETS = [f"model.contacts.{c}.stiffness_N_m=1e11" for c in ("c21", "c32", "c13", "c31", "c14", "c45", "c56", "c35")]
+
+
+@benchmark("simulate_stiff_refusal", "the handover scene with every contact 100x stiffer (600 spm): refused at its "
+                                     "step budget at rtol 1e-8 against at the default rtol 1e-5", target_s=60.0)
+def _bench_simulate_stiff_refusal() -> BenchResult:
+    problem = load_problem(reference_problem_path(), STIFF_SETS)
+
+    def refused(rtol):
+        try:
+            simulate_scene(problem, "handover", 600.0, options=SimulationOptions(rtol=rtol))
+        except SolverError as exc:
+            return str(exc)
+        raise AssertionError("the stiff handover scene was not refused")
+
+    tight = best_time(lambda: refused(1e-8), repeat=1)
+    default = best_time(lambda: refused(1e-5), repeat=1)
+    return BenchResult(rows=[BenchRow("refused at rtol 1e-8", tight), BenchRow("refused at rtol 1e-5", default)],
+                       measured_s=tight, ratio=tight / default, ratio_label="rtol 1e-8 / rtol 1e-5",
+                       notes=["the budget bounds the time at any tolerance (4x max_steps at most, and one output "
+                              "interval at most 10 % of the steps left); target: within 5x, under 60 s"],
+                       target_s=60.0, ratio_max=5.0)

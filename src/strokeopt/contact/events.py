@@ -95,9 +95,9 @@ METRICS: tuple[Metric, ...] = (
     Metric("peak_drive_force_error_pct", None, "estimated error of the drive force's peak: its window integrated again "
                                                "at 1/100 of the tolerances (None: not estimated)"),
     Metric("peak_contact_force_errors_pct", None, "estimated error of each element's peak, as for the drive force"),
-    Metric("peak_forces_converged", None, "every peak's estimated error within 5 % (None: not estimated); the "
+    Metric("peak_forces_converged", None, "every peak's estimated error within 1 % (None: not estimated); the "
                                           "peaks that are not are named in unconverged_peaks"),
-    Metric("unconverged_peaks", None, "the peaks whose estimated error is above 5 % ('drive' for the drive force)", ()),
+    Metric("unconverged_peaks", None, "the peaks whose estimated error is above 1 % ('drive' for the drive force)", ()),
 )
 METRIC_KEYS: tuple[str, ...] = tuple(mt.key for mt in METRICS)
 

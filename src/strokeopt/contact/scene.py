@@ -46,6 +46,9 @@ if TYPE_CHECKING:
 #: 51 300 at 500 spm; a million steps are 3-4 s of CPU). A tighter tolerance gets more (``step_budget``).
 MAX_STEPS = 1_000_000
 BUDGET_RTOL = 1e-5  # the tolerance max_steps is stated at
+#: A tighter tolerance gets at most this many times ``max_steps``: the budget bounds the time of a run at any
+#: tolerance (a scene too stiff for it is refused in about the same time at rtol 1e-8 as at the default).
+BUDGET_GROWTH = 4.0
 
 #: The integrator's tolerances a simulation accepts (SimulationOptions.check; simulate --rtol, --atol).
 #: rtol: up to 1e-2 (at 0.1 the reference scene's peak forces leave their plausible bound and its impact is
@@ -72,9 +75,10 @@ class Scene:
 
     def step_budget(self, rtol: float) -> int:
         """The steps a cycle may take at relative tolerance ``rtol``: ``max_steps``, times
-        ``(1e-5 / rtol)^(1/3)`` below 1e-5 (BDF of order 2 takes steps ~ rtol^(1/3): 22 600 at 1e-5,
-        200 000 at 1e-8, 980 000 at 1e-10 in the release scene)."""
-        return int(self.max_steps * max(1.0, (BUDGET_RTOL / rtol) ** (1.0 / 3.0)))
+        ``(1e-5 / rtol)^(1/3)`` below 1e-5 (BDF of order 2 takes steps ~ rtol^(1/3): 20 100 at 1e-5,
+        200 000 at 1e-8, 900 000 at 1e-10 in the release scene at 600 spm, 1.8 million in the handover
+        scene), at most :data:`BUDGET_GROWTH` times ``max_steps``."""
+        return int(self.max_steps * min(max(1.0, (BUDGET_RTOL / rtol) ** (1.0 / 3.0)), BUDGET_GROWTH))
 
     def check_resolvable(self, file: str, period: float, budget: int) -> None:
         """Refuse a scene whose stiffest contact rings faster than ``budget`` steps can follow over a cycle of

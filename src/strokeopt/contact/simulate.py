@@ -26,7 +26,9 @@ prints the full table):
 * one integrator object, restarted at every joint of the stroke (known-time
   discontinuities) with the piece index as a parameter, time normalised per piece, a
   fine output grid inside each call (output points cost almost nothing: CVODES
-  interpolates them);
+  interpolates them); a piece that needs more steps at some output point than the budget
+  left spreads over them is integrated again in chunks of output points, so that the budget
+  stops a scene too stiff for it at any tolerance (stepper.py);
 * hard ``if_else`` contact switches with CVODES (BDF) in one call per stroke piece: the
   error in impact velocity falls with the tolerance, 1e-4 m/s at the default rtol 1e-5;
 * BDF order limited to 2 (``max_order``): orders 3-5 are not A-stable and the lightly damped
@@ -74,18 +76,15 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
-import casadi as ca
 import numpy as np
 
 from ..errors import ProblemError, SolverError
 from .events import scene_metrics
 from .options import METHODS, SimulationOptions  # noqa: F401  (the scene's options; METHODS for the readers)
-from .scene import BUDGET_RTOL
-from .peaks import PEAK_POINTS, TIGHTER, scene_peaks
-
-REFINE_POINTS = 200  # an output interval is re-integrated on this many points to locate an event in it
+from .peaks import scene_peaks
+from .stepper import CasadiStepper, step_budget
 
 
 @dataclass
@@ -143,9 +142,6 @@ class SceneResult:
                 "smoothing_mm": self.options.smoothing * 1e3}
 
 
-# --------------------------------------------------------------------------- the CasADi stepper
-
-
 def drive_reference(problem) -> tuple[float, float]:
     """``(sign, s_ref)`` of ``x_driven = sign * (s - s_ref)``: zero at the start of the handover move,
     positive in its direction (the first move if none is marked)."""
@@ -157,146 +153,6 @@ def drive_reference(problem) -> tuple[float, float]:
 
 
 _drive_reference = drive_reference  # the name tests/contact/test_scene.py imports
-
-
-def _integrator(ode, opts: SimulationOptions, grid: np.ndarray, refine: bool = False, max_steps: int = 200_000):
-    dae = ode.refine_dae if refine else ode.dae
-    # BDF order <= 2: the orders 3-5 are not A-stable, and the lightly damped contact modes
-    # (1e5-1e6 rad/s, damping ratio ~0.01) made CVODES fail its error test over and over (4-10x more steps);
-    # max_num_steps bounds the steps between two output points (CVODES counts per output point)
-    iopts = {"abstol": opts.atol, "reltol": opts.rtol, "max_num_steps": int(max_steps), "max_order": 2,
-             "disable_internal_warnings": not opts.verbose}  # SUNDIALS prints "At t = ..." to stdout otherwise
-    iopts.update(opts.integrator_options or {})
-    return ca.integrator("scene_refine" if refine else "scene", opts.method, dae, 0.0, grid[1:], iopts)
-
-
-#: SUNDIALS return flags in words (the SolverError says why instead of the raw flag).
-_FLAG_WORDS = {
-    "ERR_FAILURE": "the error test failed repeatedly (the step shrank to its minimum: the model is too stiff or "
-                   "near-singular, e.g. a body of almost no mass)",
-    "CONV_FAILURE": "the corrector did not converge (the step shrank to its minimum: the model is too stiff or "
-                    "near-singular)",
-    "TOO_MUCH_WORK": "the step budget ran out",
-    "TOO_MUCH_ACC": "the tolerances are tighter than the arithmetic allows",
-}
-
-
-def _why(exc: RuntimeError) -> str:
-    text = str(exc).splitlines()[-1]
-    for flag, words in _FLAG_WORDS.items():
-        if flag in text:
-            return words
-    return text[:200]
-
-
-class CasadiStepper:
-    """Integrates a scene ODE with ``casadi.integrator`` (CVODES or IDAS, ``opts.method``).
-
-    The interface every stepper of :func:`integrate_scene` has:
-
-    * ``name``: the integrator's name in messages;
-    * ``piece(k, piece, z0, p) -> (states on grid[1:], steps)``: one stroke piece, ``sigma`` 0 -> 1;
-    * ``segment(p, z0, sigma_a, sigma_b) -> states``: ``z0`` and the states on REFINE_POINTS points
-      from ``sigma_a`` to ``sigma_b`` (event location, restarts at switches);
-    * ``segment_steps``: the steps of all ``segment`` calls so far.
-    """
-
-    def __init__(self, ode, grid: np.ndarray, opts: SimulationOptions, scene: str, spm: float):
-        self.ode, self.opts, self.scene, self.spm = ode, opts, scene, spm
-        self.name = opts.method
-        self.budget = step_budget(ode.scene, opts)
-        self.steps = 0  # of the stroke pieces so far
-        self._piece = _integrator(ode, opts, grid, max_steps=self.budget)
-        self._segment = None  # built on first use
-        self._windows = {}  # peak windows (peaks.py), at the tolerances and tighter
-        self.segment_steps = 0
-
-    def piece(self, k, piece, z, pk):
-        """One stroke piece; stops the scene once its steps pass the budget (one output point may take it all)."""
-        integ = self._piece
-        try:
-            res = integ(x0=z, p=pk)
-        except RuntimeError as exc:
-            if "TOO_MUCH_WORK" in str(exc):
-                raise self._over_budget(k, piece, integ.stats(), None) from None
-            raise SolverError(f"{self.opts.method} failed in stroke piece {k + 1} ({piece.label}) of scene "
-                              f"{self.scene!r} at {self.spm:g} spm: {_why(exc)} (tighten or loosen the "
-                              f"tolerances)") from None
-        steps = int(integ.stats().get("nsteps", 0) or 0)
-        self.steps += steps
-        if self.steps > self.budget:
-            raise self._over_budget(k, piece, integ.stats(), steps)
-        return np.asarray(res["xf"]), steps
-
-    def _over_budget(self, k, piece, stats, steps) -> SolverError:
-        """The scene needed more steps than its budget: where, the step it was taking, the stiffest contact.
-        ``steps``: those of the piece when it ended past the budget (None: stopped inside it)."""
-        sc = self.ode.scene
-        if steps is None:
-            h = float(stats.get("hlast") or 0.0) * piece.duration
-            sigma = float(stats.get("tcur") or 0.0)
-            where = f"{(piece.t_start + sigma * piece.duration) * 1e3:.4g} ms into the cycle, " if 0 < sigma <= 1 else ""
-            step = f"its steps had shrunk to {h:.2g} s" if h > 0 else "its steps had shrunk"
-        else:
-            where = f"the end ({(piece.t_start + piece.duration) * 1e3:.4g} ms into the cycle) of "
-            step = f"its steps there averaged {piece.duration / max(steps, 1):.2g} s"
-        periods = sc.contact_periods()
-        stiff = ""
-        if periods:
-            period, name, body = periods[0]
-            el = sc.model.elements[name]
-            table = "links" if el.kind == "link" else ("springs" if el.kind == "spring" else "contacts")
-            stiff = (f", forced by its stiffest contact {name} ({el.stiffness:.3g} N/m on the "
-                     f"{sc.model.bodies[body].mass * 1e3:.3g} g {body}: contact period {period:.2g} s); soften it "
-                     f"(model.{table}.{name}.stiffness_N_m) or")
-        if self.opts.max_steps is not None:
-            budget = "the max_steps option"
-        elif self.budget == sc.max_steps:
-            budget = f"scenes.{sc.name}.max_steps"
-        else:
-            budget = f"scenes.{sc.name}.max_steps = {sc.max_steps:,} at rtol {BUDGET_RTOL:g}, scaled to rtol {self.opts.rtol:g}"
-        return SolverError(f"scene {self.scene!r} at {self.spm:g} spm stopped after {self.budget:,} integrator steps "
-                           f"(its budget: {budget}); it had reached {where}stroke piece {k + 1} ({piece.label}), "
-                           f"and {step}{stiff or ';'} raise scenes.{sc.name}.max_steps")
-
-    def window(self, pk, z0, sa, sb, tight=False, points=PEAK_POINTS):
-        """``z0`` and the states on ``points`` points from ``sigma_a`` to ``sigma_b`` (peaks.py); ``tight``: at
-        the tolerances divided by TIGHTER (its accuracy estimate; None if the integrator fails there)."""
-        if not tight and points == REFINE_POINTS:  # the event location's integrator
-            return self.segment(pk, z0, sa, sb)
-        integ = self._windows.get((tight, points))
-        if integ is None:
-            opts = self.opts
-            if tight:
-                opts = replace(opts, rtol=max(opts.rtol / TIGHTER, 1e-12), atol=max(opts.atol / TIGHTER, 1e-13))
-            integ = self._windows[tight, points] = _integrator(self.ode, opts, np.linspace(0.0, 1.0, points + 1),
-                                                               refine=True, max_steps=self.budget)
-        try:
-            xf = np.asarray(integ(x0=z0, p=np.concatenate([pk, [sa, sb]]))["xf"])
-        except RuntimeError as exc:
-            if tight:
-                return None
-            raise SolverError(f"{self.opts.method} failed locating a peak force between {sa:.6g} and {sb:.6g} of stroke "
-                              f"piece {int(pk[0]) + 1} of scene {self.scene!r}: {_why(exc)}") from None
-        self.segment_steps += int(integ.stats().get("nsteps", 0) or 0)
-        return np.hstack([np.asarray(z0, float)[:, None], xf])
-
-    def segment(self, pk, z0, sa, sb):
-        if self._segment is None:
-            self._segment = _integrator(self.ode, self.opts, np.linspace(0.0, 1.0, REFINE_POINTS + 1), refine=True,
-                                        max_steps=self.budget)
-        try:
-            xf = np.asarray(self._segment(x0=z0, p=np.concatenate([pk, [sa, sb]]))["xf"])
-        except RuntimeError as exc:
-            raise SolverError(f"{self.opts.method} failed between {sa:.6g} and {sb:.6g} of stroke piece "
-                              f"{int(pk[0]) + 1} of scene {self.scene!r}: {_why(exc)}") from None
-        self.segment_steps += int(self._segment.stats().get("nsteps", 0) or 0)
-        return np.hstack([np.asarray(z0, float)[:, None], xf])
-
-
-def step_budget(scene, opts: SimulationOptions) -> int:
-    """The integrator steps a cycle of ``scene`` may take with ``opts`` (its own budget unless ``opts.max_steps``)."""
-    return int(opts.max_steps) if opts.max_steps is not None else scene.step_budget(opts.rtol)
 
 
 # --------------------------------------------------------------------------- the shared core
@@ -426,7 +282,8 @@ def _run(sc, scene, spm, stroke, period, ode, grid, stepper, opts, cpu0) -> Scen
                 sk = np.concatenate([[0.0], sk])
                 nst = stepper.segment_steps - before
                 if steps + nst > getattr(stepper, "budget", math.inf):  # the piece-wise path keeps it too
-                    raise stepper._over_budget(k, piece, {}, nst)
+                    stepper.steps = steps + nst
+                    raise stepper._over_budget(k, piece, nst)
             else:
                 xf, nst = stepper.piece(k, piece, z, pk)
             zk = np.hstack([z[:, None], xf])

@@ -12,6 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from ..contact.events import GAP_CLOSED, LAG_THRESHOLD
+from ..contact.peaks import PEAK_TOLERANCE
 from ..contact.studies import lag_onset_spm
 from ..io.cycle import STITCH, cycle_of
 from .figures import frame_label
@@ -79,10 +80,11 @@ def scene_text(problem, scene: str, summary: dict) -> str:
     if any(v is not None for v in errors.values()):
         known = {k: v for k, v in errors.items() if v is not None}
         worst = max(known, key=known.get)
-        lines.append((f"peak forces NOT CONVERGED: " + ", ".join(f"{k} ({errors[k]:.3g} %)" if errors[k] is not None else k
-                                                             for k in s["unconverged_peaks"]) + " above 5 %; tighten --rtol"
+        lines.append(("peak forces NOT CONVERGED: " + ", ".join(f"{k} ({errors[k]:.3g} %)" if errors[k] is not None else k
+                                                             for k in s["unconverged_peaks"])
+                      + f" above {PEAK_TOLERANCE:.0%}; tighten --rtol"
                       if s["unconverged_peaks"] else f"peak forces converged: estimated error at most {known[worst]:.2g} % "
-                      f"({worst})") + "; each peak's output interval integrated again at 1/100 of the tolerances")
+                      f"({worst})") + "; each peak found again at 1/100 of the tolerances from the start of its stroke piece")
     if s.get("drive"):
         lines.append(drive_text(s["drive"]) + "; the contact model takes the stroke as given and models neither "
                      "the motor nor the belt")
