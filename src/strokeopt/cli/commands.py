@@ -346,6 +346,8 @@ def cmd_simulate(args) -> int:
     problem = _load(args)
     scene = _scene_name(args, problem)
     options = _sim_options(args)
+    if args.vary:
+        return _simulate_vary(args, problem, scene, options)
     if args.study == "tolerance":
         if isinstance(args.spm, list):
             raise ProblemError("--spm", "", "the tolerance study runs at one speed, not a range")
@@ -403,6 +405,53 @@ def cmd_simulate(args) -> int:
               "scene's bodies and springs can load any element with: contact/plausible.py)", file=sys.stderr)
         return 1
     return 0
+
+
+def _simulate_vary(args, problem, scene, options) -> int:
+    """``simulate --vary``: the scene at one rate over the values of one field or several moved together."""
+    from ..report.contact import SWEEP_COLUMNS, plot_sweep
+    from ..report.format import format_table, to_json
+    from ..studies.runner import study_runner
+    from ..studies.vary import parse_vary, vary_scene
+
+    if isinstance(args.spm, list):
+        raise ProblemError("--vary", "", "varies a number at one rate: give --spm one rate, not a sweep")
+    if args.study is not None or args.design_stroke is not None:
+        raise ProblemError("--vary", "", "runs the problem's stroke at one rate: omit --study and --design")
+    varies = parse_vary(args.vary, problem)
+    runner = study_runner(args.workers, args.scheduler, tasks=len(varies[0].values))
+    rows = vary_scene(problem, scene, problem.spm, varies, options, runner=runner, progress=not args.json)
+    flat = [{**{v.field: r["varied"][v.field] for v in varies}, **r} for r in rows]
+    first = next((r for r in flat if r.get("premature_release")), None)
+    failed = [r for r in flat if "failed" in r]
+    if args.json:
+        _emit(to_json({"status": "failed" if failed else "ok", "scene": scene, "spm": problem.spm,
+                       "varied": [{"field": v.field, "nominal": v.nominal,
+                                   "values": [v.value(k) for k in range(len(v.values))]} for v in varies],
+                       "runner": runner.describe(), "rows": rows}))
+    else:
+        columns = [(v.field, v.field) for v in varies] + [c for c in SWEEP_COLUMNS if c[0] != "spm"]
+        columns.insert(len(columns) - 1, ("peak_drive_force_N", "drive N"))
+        print(format_table([r for r in flat if "failed" not in r], columns,
+                           title=f"{problem.name}: scene {scene!r} at {problem.cycle.rate(problem.spm)}, "
+                                 + " and ".join(f"{v.field} (file: {v.nominal:g})" for v in varies) + " varied"))
+        what = " and ".join(v.field for v in varies)
+        lagging = [r for r in flat if r.get("lag")]
+        print("\nthe follower lags at no step" if not lagging else "\nthe follower lags at every step" if len(lagging) == len(
+            flat) - len(failed) else f"\nthe follower lags at {what} = " + "; ".join(
+            ", ".join(f"{r[v.field]:g}" for v in varies) for r in lagging))
+        if first is not None:
+            print(f"premature release from {what} = " + ", ".join(f"{first[v.field]:g}" for v in varies)
+                  + ": gap N closes before the impact (columns 'premature', 'min gap N mm')")
+        else:
+            print("no premature release: gap N stays open until the impact at every step")
+        for r in failed:
+            print(f"failed at {', '.join(f'{v.field} = {r[v.field]:g}' for v in varies)}: {r['failed']}")
+        print(f"ran on {runner.describe()}")
+    label = varies[0].field + (f" (moved with {', '.join(v.field for v in varies[1:])})" if len(varies) > 1 else "")
+    _write_figure(lambda p: plot_sweep(rows, p, problem.cycle, varied=varies[0].field, label=label),
+                  _plot_path(args, "simulate_vary", scene, spm_tag(problem.spm), problem.stroke().label), args)
+    return 1 if failed else 0
 
 
 def cmd_verify(args) -> int:

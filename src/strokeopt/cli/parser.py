@@ -267,12 +267,15 @@ def build_parser() -> argparse.ArgumentParser:
                                    "impact velocity and angle of the control member on the stop, the lag behind the "
                                    "shell and when it ends, the smallest remaining gap N before the impact, the needle "
                                    "release angle and whether it was premature, peak pad, contact and drive forces. "
-                                   "--spm START:STOP:STEP sweeps the speed; --study tolerance prints a work-precision "
+                                   "--spm START:STOP:STEP sweeps the speed; --vary FIELD=START:STOP:STEP sweeps a number of the "
+                                   "model (several --vary: a coupled move); --study tolerance prints a work-precision "
                                    "table. Cam angles: 360 deg per cycle, 0 at the start of the first interval.",
                        epilog="Examples: strokeopt simulate problems/deco2000_needle_bar.toml --scene release --spm 600; "
                               "strokeopt simulate problems/deco2000_needle_bar.toml --spm 300:1200:20 --plot sweep.png; "
                               "strokeopt simulate problems/deco2000_needle_bar.toml --set "
-                              "model.springs.k2.stiffness_N_m=1240 --set model.contacts.c32.gap_mm=6.5")
+                              "model.springs.k2.stiffness_N_m=1240 --set model.contacts.c32.gap_mm=6.5; strokeopt simulate "
+                              "problems/deco2000_needle_bar.toml --spm 600 --vary model.contacts.c32.gap_mm-=0:5:1 "
+                              "--vary model.contacts.pad.gap_mm+=0:5:1")
     _stroke_options(p, sweep=True)
     _drive_options(p, "the design's optimal stroke is simulated (the contact model itself has no motor or belt)", stroke=True)
     _verbose_option(p, "the integrator's statistics")
@@ -280,6 +283,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--study", choices=("tolerance",),
                    help="'tolerance': error of impact velocity and release angle against a tight reference vs CPU "
                         "time, over tolerances and smoothing widths")
+    p.add_argument("--vary", action="append", default=[], metavar="FIELD=START:STOP:STEP",
+                   help="simulate the scene at one rate over values of a number of the problem (a --set path: "
+                        "model.contacts.c32.gap_mm=5:7.4:0.2, model.bodies.control.mass_g=35:50:5) and print a "
+                        "table and a figure of its results; FIELD+=... / FIELD-=... shift the file's value; several "
+                        "--vary move together step by step (the impact point: --vary model.contacts.c32.gap_mm-=0:5:1 "
+                        "--vary model.contacts.pad.gap_mm+=0:5:1)")
+    _study_runner_options(p, "the steps of --vary", spread="each simulating steps as they free up")
     _plot_option(p, "simulate_<scene>_<spm>spm_<law>")
     p.set_defaults(run=cmd_simulate)
 

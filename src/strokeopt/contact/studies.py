@@ -4,7 +4,8 @@
 :func:`lag_onset_spm` reads the first rate at which a result turns true;
 :func:`tolerance_study` compares tolerances, switch smoothing, CVODES/IDAS and
 restarts at switches against a tight reference (the numbers quoted in
-simulate.py come from it). report/contact.py prints and draws both.
+simulate.py come from it). report/contact.py prints and draws both; studies/vary.py steps numbers of the
+problem at one rate.
 """
 
 from __future__ import annotations
@@ -84,3 +85,4 @@ def _errors(m: dict, ref: dict) -> dict:
         return abs(m[key] - ref[key])
 
     return {name: err(key) for name, key in STUDY_ERRORS.items()}
+

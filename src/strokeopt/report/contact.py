@@ -13,7 +13,6 @@ import numpy as np
 
 from ..contact.events import GAP_CLOSED, LAG_THRESHOLD
 from ..contact.peaks import PEAK_TOLERANCE
-from ..contact.studies import lag_onset_spm
 from ..io.cycle import STITCH, cycle_of
 from .figures import frame_label
 from .format import drive_text, format_table
@@ -219,28 +218,39 @@ def plot_scene(r, path=None, problem=None, window=None):
     return fig
 
 
-def plot_sweep(rows: list[dict], path=None, cycle=STITCH):
-    """Impact velocity and min remaining gap N over the machine's rate (``cycle``: its cycle, io/cycle.py)."""
+def plot_sweep(rows: list[dict], path=None, cycle=STITCH, varied: str | None = None, label: str | None = None):
+    """Impact velocity and min remaining gap N over the machine's rate (``cycle``: its cycle, io/cycle.py), or over
+    the problem field ``varied`` of ``simulate --vary`` rows (studies/vary.py: the first field varied; ``label``:
+    the axis's words for it)."""
     cycle = cycle_of(cycle)
-    spm = [r["spm"] for r in rows]
+    rows = [r for r in rows if "failed" not in r]
+    x = [r["varied"][varied] if varied else r["spm"] for r in rows]
     fig, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 6), constrained_layout=True)
-    axes[0].plot(spm, [np.nan if r["impact_velocity_m_s"] is None else r["impact_velocity_m_s"] for r in rows], "o-", ms=3)
+    axes[0].plot(x, [np.nan if r["impact_velocity_m_s"] is None else r["impact_velocity_m_s"] for r in rows], "o-", ms=3)
     axes[0].set_ylabel("impact speed [m/s]\n(toward the handover)")
-    axes[1].plot(spm, [np.nan if r["min_gap_N_mm"] is None else r["min_gap_N_mm"] for r in rows], "o-", ms=3,
+    axes[1].plot(x, [np.nan if r["min_gap_N_mm"] is None else r["min_gap_N_mm"] for r in rows], "o-", ms=3,
                  color="tab:purple")
     axes[1].set_ylabel("min remaining gap N [mm]")
     axes[1].axhline(GAP_CLOSED * 1e3, color="tab:red", ls=":", lw=1, label=f"closed below {GAP_CLOSED * 1e3:g} mm")
+    premature = [xi for xi, r in zip(x, rows) if r.get("premature_release")]
+    if premature:
+        axes[1].plot(premature, [GAP_CLOSED * 1e3] * len(premature), "x", color="tab:red", ms=7,
+                     label="premature release")
     axes[1].legend(fontsize=8, loc="best")
-    onset = lag_onset_spm(rows)
+    onset = None if varied else next((xi for xi, r in zip(x, rows) if r.get("lag")), None)
+    lagging = [(xi, r["impact_velocity_m_s"]) for xi, r in zip(x, rows) if varied and r.get("lag")
+               and r["impact_velocity_m_s"] is not None]
+    if lagging:  # a field varied need not make the lag monotonic: each step that lags is marked
+        axes[0].plot(*zip(*lagging), "o", mfc="none", color="tab:orange", ms=9, label="follower lags")
     for ax in axes:
         ax.grid(True, alpha=0.3)
         if onset is not None:
             ax.axvline(onset, color="tab:orange", ls="--", lw=1, label=f"follower lags from {cycle.rate(onset)}")
-    if onset is not None:
+    if onset is not None or lagging:
         axes[0].legend(fontsize=8, loc="best")  # named in a legend placed clear of the curve
-    axes[1].set_xlabel(f"{cycle.rate_name} [{cycle.rate_unit}]")
-    axes[0].set_title(f"scene {rows[0]['scene']}, {rows[0].get('stroke') or 'stroke'}: speed sweep" if rows
-                      else "speed sweep")
+    axes[1].set_xlabel((label or varied) if varied else f"{cycle.rate_name} [{cycle.rate_unit}]")
+    what = f"{varied} varied at {cycle.rate(rows[0]['spm'])}" if varied and rows else "speed sweep"
+    axes[0].set_title(f"scene {rows[0]['scene']}, {rows[0].get('stroke') or 'stroke'}: {what}" if rows else what)
     if path is not None:
         from .figures import fit_titles
 

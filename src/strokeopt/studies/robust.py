@@ -81,7 +81,7 @@ def parse_tolerance(text: str, problem, option: str = "--tolerance") -> Toleranc
         raise ProblemError(option, str(text), "expected FIELD=±X% or FIELD=±X (the field's unit), optionally "
                                               ":normal, e.g. 'model.springs.k2.stiffness_N_m=±10%'")
     field = m["field"]
-    nominal = _number_at(problem, field, option)
+    nominal = number_at(problem, field, option)
     try:
         half = float(m["value"]) / (100.0 if m["pct"] else 1.0)
     except ValueError:
@@ -105,7 +105,7 @@ def parse_tolerance(text: str, problem, option: str = "--tolerance") -> Toleranc
     return tol
 
 
-def _number_at(problem, field: str, option: str) -> float:
+def number_at(problem, field: str, option: str) -> float:
     """The number at the ``--set`` path ``field`` of the problem's data, or ProblemError naming it."""
     from ..io.fields import did_you_mean, missing_element, parse_override
 
@@ -119,7 +119,7 @@ def _number_at(problem, field: str, option: str) -> float:
                                               f"{did_you_mean(seg, node) if isinstance(node, dict) else ''}")
         node = node[seg - 1] if isinstance(seg, int) else node[seg]
     if isinstance(node, bool) or not isinstance(node, (int, float)):
-        raise ProblemError(option, field, f"is {node!r}, not a number: a tolerance scatters a number")
+        raise ProblemError(option, field, f"is {node!r}, not a number")
     return float(node)
 
 
