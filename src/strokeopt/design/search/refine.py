@@ -97,8 +97,17 @@ def pins_in_place(nlp: Nlp, x: np.ndarray, new: dict) -> bool:
     """
     req = nlp.request
     old = req.pin_times
-    if all((new.get(key) is None) == (old.get(key) is None) and (new.get(key) is None or new[key] == old[key])
-           for key in new):
+
+    def same(key):
+        if (new.get(key) is None) != (old.get(key) is None):
+            return False
+        if new.get(key) is None or new[key] == old[key]:
+            return True
+        # a crossing whose time is a variable (pins.pin_crossing) is in place while it stays in its mesh interval
+        interval = lambda tau: min(int(tau / req.mesh.h), req.mesh.intervals - 1)  # noqa: E731
+        return key in nlp.graph.crossings and interval(new[key]) == interval(old[key])
+
+    if all(same(key) for key in new):
         return True
     moved = replace(req, pin_times=new)
     terms = nlp.graph.terms

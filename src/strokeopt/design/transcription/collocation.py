@@ -95,6 +95,12 @@ class Mesh:
         powers = theta.reshape(-1, 1) ** np.arange(self.degree + 3).reshape(1, -1)
         return {k: powers @ c for k, c in self._coefficients.items()}
 
+    def symbolic_rows(self, theta) -> dict:
+        """:meth:`matrices` at one local point ``theta`` that is a CasADi expression (a variable of the NLP): rows
+        of ``d + 1`` columns (1 x (d + 1) each)."""
+        powers = ca.horzcat(*[theta ** p for p in range(self.degree + 3)])
+        return {k: ca.mtimes(powers, c) for k, c in self._coefficients.items()}
+
     def unit_position_coefficients(self, s0: float, v0: float, a_nodes) -> np.ndarray:
         """Ascending coefficients in theta (0..1) of ``s0 + h*v0*theta + h^2 * double integral of a`` of one interval."""
         acc = Polynomial([0.0])

@@ -21,7 +21,7 @@ import numpy as np
 from .collocation import fine_grid
 from .limits import Limit, LimitGroup
 from .free import model_values
-from .pins import crossings, pin_motion
+from .pins import crossings, pin_crossing, pin_motion
 
 
 def _move_motion(mv, sol, per_interval: int):
@@ -102,21 +102,19 @@ class ImpactVelocity(Limit):
     def on_cycle(self, g, terms):
         req = g.request
         cd = req.contact
-        if cd is None or cd.settings.impact_velocity_max is None or cd.impact_position is None:
+        speeds = impact_speeds(g)
+        if not speeds:
             return None
-        vmax, pos = cd.settings.impact_velocity_max, cd.impact_position
-        values = []
-        for k, pos_, first in g.pins:
-            mv = req.moves[k]
-            if pos_ != pos or not cd.closes_impact(mv):
-                continue
-            weight, v, _ = pin_motion(g, k, pos, first)
-            lim = LimitGroup(f"impact velocity move {mv.index}", f"impact velocity ({cd.impact[0]} meets "
-                             f"{req.problem.model.events.impact})", vmax, "m/s",
-                             lambda sig: vmax * (1 + sig), mv.index, "impact velocity")
-            g.built.limit_abs(lim, weight * v / vmax)
-            values.append(weight * v / vmax)
-        return {"pin_values": values}  # the pins move with the solution: refine.pins_in_place compares these too
+        vmax = cd.settings.impact_velocity_max
+        scale = vmax if vmax is not None else impact_speed_scale(req)
+        for mv, speed in speeds:
+            if vmax is not None:
+                lim = LimitGroup(f"impact velocity move {mv.index}", f"impact velocity ({cd.impact[0]} meets "
+                                 f"{req.problem.model.events.impact})", vmax, "m/s",
+                                 lambda sig: vmax * (1 + sig), mv.index, "impact velocity")
+                g.built.limit_abs(lim, speed / vmax)
+        # the pins move with the solution: refine.pins_in_place compares these too (the limit's, or the objective's)
+        return {"pin_values": [speed / scale for _, speed in speeds]}
 
     def report(self, nlp, outcome):
         req = nlp.request
@@ -133,6 +131,31 @@ class ImpactVelocity(Limit):
             return []
         return [{"name": f"impact velocity ({req.problem.model.events.impact})", "value": max(speeds),
                  "limit": cd.settings.impact_velocity_max, "unit": "m/s"}]
+
+
+def impact_speeds(g, crossing: bool = False) -> list:
+    """``(move, signed speed [m/s] times the pin's weight)`` where each move that closes the impact contact meets
+    its position (the pins of :func:`.pins.pin_positions`); empty without an impact pin. ``crossing``: at a crossing
+    time that is a variable held at the position (:func:`.pins.pin_crossing`, for the objective), else at the pin's
+    time (:func:`.pins.pin_motion`, for the limit)."""
+    req = g.request
+    cd = req.contact
+    if cd is None or cd.impact_position is None:
+        return []
+    out = []
+    for k, pos, first in g.pins:
+        mv = req.moves[k]
+        if pos == cd.impact_position and cd.closes_impact(mv):
+            weight, v = pin_crossing(g, k, pos, first) if crossing else pin_motion(g, k, pos, first)[:2]
+            out.append((mv, weight * v))
+    return out
+
+
+def impact_speed_scale(req) -> float:
+    """A speed the impact velocity is measured against in the NLP: the largest mean speed of the moves that close
+    the impact contact [m/s]."""
+    cd = req.contact
+    return max((abs(mv.stroke) / mv.duration for mv in req.moves if cd.closes_impact(mv)), default=1.0)
 
 
 #: The limits of ``[design.contact]``, built after the moves and the drive (:func:`.nlp.build_graph`).

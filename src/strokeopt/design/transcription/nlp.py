@@ -170,6 +170,7 @@ class Graph:
     #: pinned points, the handover error)
     terms: Terms = Terms()
     pin_motions: dict = field(default_factory=dict)  # (move, position) -> (weight, v, a) at the pin (pins.pin_motion)
+    crossings: set = field(default_factory=set)  # (move, position) of the pins whose crossing time is a variable
     load: Any = None  # the drive's load, with the free model parameters in it (free.build_free)
     free_stiffness: dict = field(default_factory=dict)  # element name -> stiffness symbol (free.build_free)
     #: the problem's own transmission with its free fields (free.build_free); None on a belt

@@ -172,6 +172,24 @@ def min_stiffness(g):
     return Cost(expr + 1e3 * _smoothing(g), "-", lambda f, r: f, expr)
 
 
+def min_impact_velocity(g):
+    """The gentlest impact: the speed with which the driven body's cluster meets the impact contact of ``[model.events]``
+    (the needle bar's control member on its stop), a pinned point of every move that closes it (design/pins.py),
+    relative to the moves' mean speed, under every limit of the design (``[design.contact] keep_closed``: no lag)."""
+    from .contact_limits import impact_speed_scale, impact_speeds
+
+    speeds = impact_speeds(g, crossing=True)
+    if not speeds:
+        raise ProblemError(str(g.problem.file), "design.objective",
+                           "min_impact_velocity needs [design.contact] and a [model.events] impact contact that a move "
+                           "closes (the contact the driven body's cluster meets)")
+    b, scale = g.built, impact_speed_scale(g.request)
+    z = b.var("impact velocity", (1, 1), 0.0, np.inf, 1.0)
+    rows = [z - v / scale for _, v in speeds] + [z + v / scale for _, v in speeds]
+    b.constrain("impact velocity epigraph", ca.vertcat(*rows), 0.0, np.inf)
+    return Cost(z + _smoothing(g), "m/s", lambda f, r: max(f, 0.0) * impact_speed_scale(r), z)
+
+
 @dataclass(frozen=True)
 class Objective:
     """An objective: what it minimises, whether it needs the drive, its builder, and whether the cycle
@@ -214,6 +232,9 @@ REGISTRY = {o.name: o for o in (
               _integral_objective("snap", 7, "m^2/s^7"), jerk_continuous=True),
     Objective("min_stiffness", "the free model stiffnesses of [design.free] (the softest springs the limits allow), "
               "each relative to its upper bound", False, min_stiffness, quantity="spring stiffness"),
+    Objective("min_impact_velocity", "the speed with which the driven body's cluster meets the impact contact of "
+              "[model.events] ([design.contact]; the needle bar's control member on its stop)", False,
+              min_impact_velocity, quantity="impact velocity"),
     Objective("min_handover_error", "largest handover error of the design's terms (the servo loop and belt) over "
               "the handover window: the most accurate stroke at this rate", True, min_handover_error,
               needs_terms=True),

@@ -19,6 +19,8 @@ from .request import Move, SolveRequest
 
 #: Mesh intervals a pinned point may move across without a new NLP structure.
 PIN_WINDOW = 3
+#: The objective that pins the impact position as ``impact_velocity_max_m_s`` does (objectives.py).
+IMPACT_OBJECTIVE = "min_impact_velocity"
 
 
 def switch_positions(drive) -> list[float]:
@@ -29,10 +31,12 @@ def switch_positions(drive) -> list[float]:
 
 def pin_positions(req: SolveRequest) -> list[float]:
     """Every pinned position of a solve: the drive's load switches, and where the contact model's rigid
-    cluster meets its impact contact (``[design.contact] impact_velocity_max_m_s``, design/contact_limits.py)."""
+    cluster meets its impact contact (``[design.contact] impact_velocity_max_m_s`` or the objective
+    ``min_impact_velocity``, design/contact_limits.py)."""
     out = switch_positions(req.drive) if req.drive is not None else []
     contact = req.contact
-    if contact is not None and contact.settings.impact_velocity_max is not None and contact.impact_position is not None:
+    if contact is not None and contact.impact_position is not None and (
+            contact.settings.impact_velocity_max is not None or req.objective == IMPACT_OBJECTIVE):
         out = out + [p for p in [contact.impact_position] if p not in out]
     return out
 
@@ -124,6 +128,47 @@ def pin_motion(g, k: int, pos: float, first: int | None):
     a_unit = ca.mtimes(e.T, ca.mtimes(A, la))
     v_unit = ca.mtimes(e.T, x.V[first_:first_ + w]) + mesh.h * ca.mtimes(e.T, ca.mtimes(A, lv))
     out = g.pin_motions[(k, pos)] = (weight, v_unit * mv.stroke / g.T[k], a_unit * mv.stroke / g.T[k] ** 2)
+    return out
+
+
+def _local_time(req: SolveRequest, k: int, pos: float) -> float:
+    """The local time (0-1) in its mesh interval of the move's last crossing of ``pos`` (0.5: none yet)."""
+    tau_c = req.pin_times.get((k, pos))
+    if tau_c is None:
+        return 0.5
+    idx = min(int(tau_c / req.mesh.h), req.mesh.intervals - 1)
+    return float(np.clip(tau_c / req.mesh.h - idx, 0.0, 1.0))
+
+
+def pin_crossing(g, k: int, pos: float, first: int | None):
+    """``(weight, v [m/s])`` of move ``k`` where it passes ``pos``, the crossing's local time a variable of the NLP
+    in the mesh interval of the last solve's crossing (a parameter), held there by the row ``s = pos``: a value
+    minimised at the crossing (``min_impact_velocity``) cannot move away from it, as it could from a pin at a fixed
+    time (:func:`pin_motion`); the crossing may move to a neighbouring interval between solves
+    (``refine.pins_in_place`` compares the intervals of these, :attr:`Graph.crossings`)."""
+    key = ("crossing", k, pos)
+    if key in g.pin_motions:
+        return g.pin_motions[key]
+    b, mesh, x, mv = g.built, g.request.mesh, g.vars[k], g.request.moves[k]
+    w = min(PIN_WINDOW, mesh.intervals)
+    first_ = 0 if first is None else first
+
+    def basis(part):
+        return lambda r: pin_basis(r, k, pos, first)[part]
+
+    e = b.params(f"crossing e{k}.{pos}", basis(0), (w, 1))
+    weight = b.param(f"crossing w{k}.{pos}", basis(3))
+    theta = b.var(f"crossing time {k}.{pos}", (1, 1), 0.0, 1.0, lambda r: _local_time(r, k, pos))
+    rows = mesh.symbolic_rows(theta)
+    A = ca.mtimes(e.T, x.A[first_:first_ + w, :])
+    V = ca.mtimes(e.T, x.V[first_:first_ + w])
+    S = ca.mtimes(e.T, x.S[first_:first_ + w])
+    s_unit = S + mesh.h * theta * V + mesh.h ** 2 * ca.mtimes(A, rows["s"].T)
+    v_unit = V + mesh.h * ca.mtimes(A, rows["v"].T)
+    b.constrain(f"crossing of move {mv.index} at {pos * 1e3:g} mm", weight * (s_unit - (pos - mv.start) / mv.stroke),
+                0.0, 0.0)
+    g.crossings.add((k, pos))
+    out = g.pin_motions[key] = (weight, v_unit * mv.stroke / g.T[k])
     return out
 
 
