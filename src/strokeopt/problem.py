@@ -19,7 +19,7 @@ from .contact.model import parse_model
 from .contact.scene import parse_scenes
 from .contact.travel import check_travel
 from .design.transcription.contact_setup import check_contact
-from .design.transcription.free import check_free
+from .design.transcription.free import check_free, check_outer
 from .design.transcription.settings import parse_design
 from .drive.spec import parse_drive
 from .drive.transmission import Transmission
@@ -148,6 +148,7 @@ def parse_problem(data: dict, file: str, overridden: frozenset = frozenset(), pa
     design = parse_design(design_table, rotary=timing.rotary) if design_table is not None else None
     check_contact(design.contact if design is not None else None, model, scenes, file)
     check_free(design.free if design is not None else (), model, drive, file, transmission, timing.position_range)
+    check_outer(design.outer if design is not None else (), data, file)
     servo_table = top.table("servo", required=False)
     servo = parse_servo(servo_table, timing, spm, transmission) if servo_table is not None else None
     if top.has("synthesis") and (top.raw("synthesis") is None or transmission.name != "linkage"):

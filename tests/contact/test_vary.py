@@ -79,12 +79,12 @@ def test_bad_vary_is_refused_naming_the_field(reference_path, capsys, vary, word
     assert len(err.splitlines()) == 1 and "--vary" in err and words in err, err
 
 
-def test_vary_runs_at_one_rate_with_the_files_stroke(reference_path, capsys):
+def test_vary_runs_one_scene_at_one_rate(reference_path, capsys):
     base = ["simulate", str(reference_path), "--plot", "none", "--vary", "model.contacts.c32.gap_mm=6:7:1"]
     assert main(base + ["--spm", "500:600:100"]) == 2
     assert "give --spm one rate, not a sweep" in capsys.readouterr().err
     assert main(base + ["--study", "tolerance"]) == 2
-    assert "omit --study and --design" in capsys.readouterr().err
+    assert "omit --study" in capsys.readouterr().err
 
 
 @pytest.mark.slow  # starts a LocalCluster of two workers
@@ -95,3 +95,13 @@ def test_the_same_rows_on_two_workers(problem):
     for a, b in zip(here, there):
         assert a["varied"] == b["varied"]
         assert a["impact_velocity_m_s"] == b["impact_velocity_m_s"] and a["min_gap_N_mm"] == b["min_gap_N_mm"]
+
+
+def test_a_designs_stroke_over_the_values(reference_path, reference_written, capsys):
+    args = ["simulate", str(reference_path), "--design", str(reference_written.design_json), "--plot", "none",
+            "--json", "--workers", "1", "--vary", "model.springs.k2.stiffness_N_m=900:1200:300"]
+    assert main(args) == 0
+    rows = json.loads(capsys.readouterr().out)["rows"]
+    assert [r["varied"]["model.springs.k2.stiffness_N_m"] for r in rows] == [900.0, 1200.0]
+    assert all(r["stroke"].startswith("optimal") for r in rows)  # the design's stroke, not the file's law
+    assert rows[0]["impact_velocity_m_s"] != rows[1]["impact_velocity_m_s"]

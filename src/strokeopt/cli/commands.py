@@ -416,11 +416,12 @@ def _simulate_vary(args, problem, scene, options) -> int:
 
     if isinstance(args.spm, list):
         raise ProblemError("--vary", "", "varies a number at one rate: give --spm one rate, not a sweep")
-    if args.study is not None or args.design_stroke is not None:
-        raise ProblemError("--vary", "", "runs the problem's stroke at one rate: omit --study and --design")
+    if args.study is not None:
+        raise ProblemError("--vary", "", "runs one scene at one rate: omit --study")
     varies = parse_vary(args.vary, problem)
     runner = study_runner(args.workers, args.scheduler, tasks=len(varies[0].values))
-    rows = vary_scene(problem, scene, problem.spm, varies, options, runner=runner, progress=not args.json)
+    rows = vary_scene(problem, scene, problem.spm, varies, options, runner=runner, progress=not args.json,
+                      stroke=args.design_stroke)
     flat = [{**{v.field: r["varied"][v.field] for v in varies}, **r} for r in rows]
     first = next((r for r in flat if r.get("premature_release")), None)
     failed = [r for r in flat if "failed" in r]
@@ -450,7 +451,8 @@ def _simulate_vary(args, problem, scene, options) -> int:
         print(f"ran on {runner.describe()}")
     label = varies[0].field + (f" (moved with {', '.join(v.field for v in varies[1:])})" if len(varies) > 1 else "")
     _write_figure(lambda p: plot_sweep(rows, p, problem.cycle, varied=varies[0].field, label=label),
-                  _plot_path(args, "simulate_vary", scene, spm_tag(problem.spm), problem.stroke().label), args)
+                  _plot_path(args, "simulate_vary", scene, spm_tag(problem.spm),
+                             (args.design_stroke or problem.stroke()).label), args)
     return 1 if failed else 0
 
 

@@ -120,6 +120,11 @@ def _request(problem, objective, spm, settings, warm_start, verbose, hold_accura
     objective = objective or settings.objective
     if objective not in OBJECTIVES:
         raise unknown_objective_error(objective)
+    if settings.outer:  # a number the collocation does not carry: only the verified solve searches it
+        raise ProblemError(str(problem.file), f"design.free.{settings.outer[0].name}",
+                           "is searched around the verified solve (solve_verified, 'strokeopt solve'), one verified "
+                           "solve per value; this design solve and the studies built on it take the file's value: "
+                           "fix it with --set or remove the entry")
     spm = float(spm if spm is not None else problem.spm)
     if not (math.isfinite(spm) and spm > 0):
         raise ProblemError("--spm", "", f"must be positive, got {spm!r}")

@@ -10,10 +10,8 @@ from __future__ import annotations
 import math
 
 from ..errors import ProblemError
+from ..io.ranges import MAX_POINTS, parse_range  # noqa: F401  (MAX_POINTS: the readers of a sweep's length)
 from ..problem import SPM_RANGE
-
-#: The most rates a sweep may hold: each is a simulation or a design solve (a second or more each).
-MAX_POINTS = 2000
 
 
 def parse_spm_range(text: str, option: str = "--spm") -> list[float]:
@@ -21,35 +19,6 @@ def parse_spm_range(text: str, option: str = "--spm") -> list[float]:
     when a whole number of steps reaches it, never passed). Raises ProblemError naming ``option``."""
     lo, hi = SPM_RANGE
     return parse_range(text, option, "SPM", (lo, hi), "spm", "stitch rates")
-
-
-def parse_range(text: str, option: str, what: str = "VALUE", plausible=(-math.inf, math.inf), unit: str = "",
-                plural: str = "values") -> list[float]:
-    """``"6"`` -> [6.0]; ``"0:5:1"`` -> 0, 1, ..., 5 (START:STOP:STEP as :func:`parse_spm_range`, whose rules it
-    is); every number finite, START and STOP within ``plausible``. Raises ProblemError naming ``option``."""
-    parts = text.split(":")
-    try:
-        nums = [float(p) for p in parts]
-    except ValueError:
-        raise ProblemError(option, "", f"expected {what} or START:STOP:STEP, got {text!r}") from None
-    if len(nums) not in (1, 3):
-        raise ProblemError(option, "", f"expected {what} or START:STOP:STEP, got {text!r}")
-    if not all(math.isfinite(x) for x in nums):
-        raise ProblemError(option, "", f"every number must be finite, got {text!r}")
-    lo, hi = plausible
-    for x in nums[:2]:
-        if not lo <= x <= hi:
-            raise ProblemError(option, "", f"{x:g}{' ' + unit if unit else ''} is outside the plausible range "
-                                           f"[{lo:g}, {hi:g}] (in {text!r})")
-    if len(nums) == 1:
-        return nums
-    start, stop, step = nums
-    if not step > 0 or stop < start:
-        raise ProblemError(option, "", f"START:STOP:STEP needs STEP > 0 and STOP >= START, got {text!r}")
-    count = int((stop - start) / step + 1e-9) + 1
-    if count > MAX_POINTS:
-        raise ProblemError(option, "", f"{text!r} is {count} {plural}, more than {MAX_POINTS}: use a larger STEP")
-    return [float(start + k * step) for k in range(count)]
 
 
 def parse_spm(text: str, option: str = "--spm") -> float:

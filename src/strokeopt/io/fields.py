@@ -223,3 +223,20 @@ def apply_overrides(data: dict, overrides: list[str], file: str) -> frozenset:
         node[last] = value
         done.add(_format_path(path))
     return frozenset(done)
+
+
+def number_in(data: dict, field: str, file, option: str) -> float:
+    """The number at the ``--set`` path ``field`` of a problem file's ``data`` (read from ``file``), or ProblemError
+    naming ``option`` and the field (no such field, an element past the end, not a number)."""
+    path, _ = parse_override(f"{field}=0")
+    node = data
+    for seg in path:
+        if isinstance(seg, int) and not (isinstance(node, list) and 1 <= seg <= len(node)):
+            raise ProblemError(option, field, f"{missing_element(seg, node)} in {file}")
+        if isinstance(seg, str) and not (isinstance(node, dict) and seg in node):
+            raise ProblemError(option, field, f"no such field in {file}"
+                                              f"{did_you_mean(seg, node) if isinstance(node, dict) else ''}")
+        node = node[seg - 1] if isinstance(seg, int) else node[seg]
+    if isinstance(node, bool) or not isinstance(node, (int, float)):
+        raise ProblemError(option, field, f"is {node!r}, not a number")
+    return float(node)

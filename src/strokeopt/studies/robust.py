@@ -25,6 +25,7 @@ import numpy as np
 from ..contact.options import SimulationOptions
 from ..drive.selection import resolve_drive
 from ..errors import ProblemError
+from ..io.fields import number_in
 from ..io.load_units import error_unit
 from .runner import run_study
 from .verified import verify_design
@@ -81,7 +82,7 @@ def parse_tolerance(text: str, problem, option: str = "--tolerance") -> Toleranc
         raise ProblemError(option, str(text), "expected FIELD=±X% or FIELD=±X (the field's unit), optionally "
                                               ":normal, e.g. 'model.springs.k2.stiffness_N_m=±10%'")
     field = m["field"]
-    nominal = number_at(problem, field, option)
+    nominal = number_in(problem.data, field, problem.file, option)
     try:
         half = float(m["value"]) / (100.0 if m["pct"] else 1.0)
     except ValueError:
@@ -103,24 +104,6 @@ def parse_tolerance(text: str, problem, option: str = "--tolerance") -> Toleranc
             raise ProblemError(option, field, f"{tol.describe()} reaches {value:g}, which the problem refuses: "
                                               f"{exc.message}") from None
     return tol
-
-
-def number_at(problem, field: str, option: str) -> float:
-    """The number at the ``--set`` path ``field`` of the problem's data, or ProblemError naming it."""
-    from ..io.fields import did_you_mean, missing_element, parse_override
-
-    path, _ = parse_override(f"{field}=0")
-    node = problem.data
-    for seg in path:
-        if isinstance(seg, int) and not (isinstance(node, list) and 1 <= seg <= len(node)):
-            raise ProblemError(option, field, f"{missing_element(seg, node)} in {problem.file}")
-        if isinstance(seg, str) and not (isinstance(node, dict) and seg in node):
-            raise ProblemError(option, field, f"no such field in {problem.file}"
-                                              f"{did_you_mean(seg, node) if isinstance(node, dict) else ''}")
-        node = node[seg - 1] if isinstance(seg, int) else node[seg]
-    if isinstance(node, bool) or not isinstance(node, (int, float)):
-        raise ProblemError(option, field, f"is {node!r}, not a number")
-    return float(node)
 
 
 def unit_samples(count: int, dims: int, method: str = "sobol", seed: int = 0) -> np.ndarray:

@@ -15,7 +15,8 @@ from dataclasses import dataclass
 
 from ..contact.simulate import SimulationOptions, simulate_scene
 from ..errors import ProblemError
-from .robust import number_at
+from ..io.fields import number_in
+from ..io.ranges import parse_range
 from .runner import run_study
 
 #: ``FIELD=A:B:STEP`` (the values), ``FIELD+=A:B:STEP`` / ``FIELD-=A:B:STEP`` (added to / taken from the file's value)
@@ -46,7 +47,6 @@ def parse_vary(texts, problem, option: str = "--vary") -> list[Vary]:
     the file's value); several move together, step by step (a coupled move: ``--vary model.contacts.c32.gap_mm-=0:5:1
     --vary model.contacts.pad.gap_mm+=0:5:1`` moves the impact point), so they must have as many values each. The
     field must be a number of the problem and every value one the problem file accepts (ProblemError naming it)."""
-    from ..files.ranges import parse_range
 
     out = []
     for text in texts:
@@ -55,7 +55,7 @@ def parse_vary(texts, problem, option: str = "--vary") -> list[Vary]:
             raise ProblemError(option, str(text), "expected FIELD=START:STOP:STEP (or FIELD+=..., FIELD-=... for a shift "
                                                   "of the file's value), e.g. 'model.contacts.c32.gap_mm=5:7.4:0.2'")
         field = m["field"]
-        nominal = number_at(problem, field, option)
+        nominal = number_in(problem.data, field, problem.file, option)
         values = parse_range(m["values"], f"{option} {field}", "VALUE")
         out.append(Vary(field, tuple(values), nominal, {"=": 0, "+=": 1, "-=": -1}[m["op"]]))
     if len({v.field for v in out}) != len(out):
@@ -80,10 +80,11 @@ def vary_overrides(varies: list[Vary], k: int) -> list[str]:
 
 
 def vary_scene(problem, scene: str, spm: float, varies: list[Vary], options: SimulationOptions | None = None,
-               runner=None, progress: bool = False) -> list[dict]:
+               runner=None, progress: bool = False, stroke=None) -> list[dict]:
     """Summaries of :func:`simulate_scene` at ``spm`` with the fields of ``varies`` stepped together (one row per
     step: the fields' values under ``"varied"``, then the scene's results; a step that fails has ``"failed"``), on
-    the study runner (studies/runner.py; None: in this process)."""
+    the study runner (studies/runner.py; None: in this process); ``stroke``: a design's stroke (default: the
+    problem's law at each step)."""
     bar = None
     if progress:
         from tqdm import tqdm
@@ -92,7 +93,7 @@ def vary_scene(problem, scene: str, spm: float, varies: list[Vary], options: Sim
             return tqdm(items, desc=f"simulating {scene}", unit="step", leave=False)
 
     steps = list(range(len(varies[0].values))) if varies else []
-    outcomes = run_study(_vary_step, steps, (problem, scene, spm, tuple(varies), options), runner=runner,
+    outcomes = run_study(_vary_step, steps, (problem, scene, spm, tuple(varies), options, stroke), runner=runner,
                          progress=bar, chained=False)
     rows = []
     for k, out in zip(steps, outcomes):
@@ -102,6 +103,6 @@ def vary_scene(problem, scene: str, spm: float, varies: list[Vary], options: Sim
 
 
 def _vary_step(shared, k, warm):
-    problem, scene, spm, varies, options = shared
+    problem, scene, spm, varies, options, stroke = shared
     sampled = problem.with_overrides(vary_overrides(list(varies), k))
-    return simulate_scene(sampled, scene, spm, options=options).summary(), None
+    return simulate_scene(sampled, scene, spm, stroke=stroke, options=options).summary(), None

@@ -96,9 +96,30 @@ def solve_verified(problem, *, objective: str | None = None, spm: float | None =
     :func:`~strokeopt.design.solve.solve_design`'s. Raises :class:`~strokeopt.errors.SolverError` when no
     design exists (naming the constraint).
     """
+    chosen = settings or getattr(problem, "design", None)
+    if chosen is not None and chosen.outer:  # a number the collocation does not carry: searched around this solve
+        from .outer import solve_outer
+
+        def solve(point, inner, warm):
+            return solve_verified(point, objective=objective, spm=spm, settings=inner, warm_start=warm or warm_start,
+                                  compare=False, scenes=scenes, options=options, verbose=verbose)
+
+        found = solve_outer(problem, chosen, solve, progress=_bar(progress, "design.free." + chosen.outer[0].name))
+        if not compare:
+            return found
+        return replace(found, comparison=compare_with_laws(found.design))
     design, accuracy = solve_checked(problem, objective=objective, spm=spm, settings=settings,
                                      warm_start=warm_start, progress=progress, verbose=verbose)
     return verify_design(design, accuracy=accuracy, compare=compare, scenes=scenes, options=options)
+
+
+def _bar(progress, what: str):
+    """A progress bar over the points of an outer search where the caller shows progress (tqdm on stderr)."""
+    if progress is None:
+        return None
+    from tqdm import tqdm
+
+    return lambda it: tqdm(it, desc=f"searching {what}", unit="point", leave=False)
 
 
 def solve_checked(problem, *, objective: str | None = None, spm: float | None = None, settings=None,

@@ -21,7 +21,7 @@ import numpy as np
 from .collocation import fine_grid
 from .limits import Limit, LimitGroup
 from .free import model_values
-from .pins import crossings, pin_crossing, pin_motion
+from .pins import IMPACT_OBJECTIVE, crossings, pin_crossing, pin_motion
 
 
 def _move_motion(mv, sol, per_interval: int):
@@ -102,19 +102,19 @@ class ImpactVelocity(Limit):
     def on_cycle(self, g, terms):
         req = g.request
         cd = req.contact
-        speeds = impact_speeds(g)
-        if not speeds:
-            return None
-        vmax = cd.settings.impact_velocity_max
-        scale = vmax if vmax is not None else impact_speed_scale(req)
+        out = {}
+        if req.objective == IMPACT_OBJECTIVE:  # the objective's speeds, at crossings held at the stop
+            out["impact_speeds"] = [v for _, v in impact_speeds(g, crossing=True)]
+        vmax = None if cd is None else cd.settings.impact_velocity_max
+        speeds = impact_speeds(g) if vmax is not None else []
         for mv, speed in speeds:
-            if vmax is not None:
-                lim = LimitGroup(f"impact velocity move {mv.index}", f"impact velocity ({cd.impact[0]} meets "
-                                 f"{req.problem.model.events.impact})", vmax, "m/s",
-                                 lambda sig: vmax * (1 + sig), mv.index, "impact velocity")
-                g.built.limit_abs(lim, speed / vmax)
-        # the pins move with the solution: refine.pins_in_place compares these too (the limit's, or the objective's)
-        return {"pin_values": [speed / scale for _, speed in speeds]}
+            lim = LimitGroup(f"impact velocity move {mv.index}", f"impact velocity ({cd.impact[0]} meets "
+                             f"{req.problem.model.events.impact})", vmax, "m/s",
+                             lambda sig: vmax * (1 + sig), mv.index, "impact velocity")
+            g.built.limit_abs(lim, speed / vmax)
+        if speeds:  # the pins move with the solution: refine.pins_in_place compares these too
+            out["pin_values"] = [speed / vmax for _, speed in speeds]
+        return out
 
     def report(self, nlp, outcome):
         req = nlp.request
@@ -149,13 +149,6 @@ def impact_speeds(g, crossing: bool = False) -> list:
             weight, v = pin_crossing(g, k, pos, first) if crossing else pin_motion(g, k, pos, first)[:2]
             out.append((mv, weight * v))
     return out
-
-
-def impact_speed_scale(req) -> float:
-    """A speed the impact velocity is measured against in the NLP: the largest mean speed of the moves that close
-    the impact contact [m/s]."""
-    cd = req.contact
-    return max((abs(mv.stroke) / mv.duration for mv in req.moves if cd.closes_impact(mv)), default=1.0)
 
 
 #: The limits of ``[design.contact]``, built after the moves and the drive (:func:`.nlp.build_graph`).

@@ -58,6 +58,23 @@ def check_free(free: tuple, model, drive, file: str, transmission=None, position
                                                               f"(model_spring = \"{name}\") so both move together")
 
 
+def check_outer(outer: tuple, data: dict, file: str) -> None:
+    """Every field a ``[design.free]`` entry outside the collocation moves (settings.OuterFree) is a number of the
+    problem file (ProblemError naming the entry); that its range gives problems the file accepts is checked when the
+    search starts (studies/outer.py)."""
+    from ...io.fields import number_in
+
+    for o in outer:
+        key = f"{FIELD}.{o.name}.{'field' if o.absolute else 'moves'}"
+        for path, _ in o.moves:
+            if path.startswith(f"{FIELD}.") or path.startswith("design.free"):
+                raise ProblemError(file, key, f"{path}: a design variable cannot move the design's own settings")
+            try:
+                number_in(data, path, file, key)
+            except ProblemError as exc:
+                raise ProblemError(file, key, f"{path}: {exc.message}") from None
+
+
 def _check_transmission(fld: str, key: str, lo: float, hi: float, transmission, drive, file: str,
                         positions: tuple) -> None:
     offered = getattr(transmission, "free_fields", {})

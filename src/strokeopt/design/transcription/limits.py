@@ -80,6 +80,9 @@ class Terms:
     pin_values: Any = None
     pin_share: Any = None
     handover: HandoverError = HandoverError()
+    #: the signed speeds [m/s] (times each pin's weight) where the moves meet the impact contact, at crossings held
+    #: there (contact_limits.ImpactVelocity, for ``min_impact_velocity``); None: not asked
+    impact_speeds: Any = None
 
 
 def collect(terms: dict, new: dict | None) -> dict:
@@ -366,5 +369,6 @@ def build_drive(g) -> dict:
 def gathered(terms: dict) -> Terms:
     """The :class:`Terms` of the builders' returned ``terms`` (the pins' values stacked)."""
     pins = terms.get("pin_values") or []
+    impact = terms.get("impact_speeds") or []
     return Terms(terms.get("move_sq"), terms.get("mean_sq"), ca.vertcat(*pins) if pins else None,
-                 terms.get("pin_share"), terms.get("handover", HandoverError()))
+                 terms.get("pin_share"), terms.get("handover", HandoverError()), ca.vertcat(*impact) if impact else None)

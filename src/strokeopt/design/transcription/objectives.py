@@ -174,20 +174,24 @@ def min_stiffness(g):
 
 def min_impact_velocity(g):
     """The gentlest impact: the speed with which the driven body's cluster meets the impact contact of ``[model.events]``
-    (the needle bar's control member on its stop), a pinned point of every move that closes it (design/pins.py),
-    relative to the moves' mean speed, under every limit of the design (``[design.contact] keep_closed``: no lag)."""
-    from .contact_limits import impact_speed_scale, impact_speeds
-
-    speeds = impact_speeds(g, crossing=True)
-    if not speeds:
+    (the needle bar's control member on its stop), at a crossing of every move that closes it, held at the stop's
+    position (contact_limits.ImpactVelocity, pins.pin_crossing), relative to the moves' mean speed, under every
+    limit of the design (``[design.contact] keep_closed``: no lag)."""
+    speeds = g.terms.impact_speeds
+    if speeds is None:
         raise ProblemError(str(g.problem.file), "design.objective",
                            "min_impact_velocity needs [design.contact] and a [model.events] impact contact that a move "
                            "closes (the contact the driven body's cluster meets)")
-    b, scale = g.built, impact_speed_scale(g.request)
+    b, scale = g.built, _impact_speed_scale(g.request)
     z = b.var("impact velocity", (1, 1), 0.0, np.inf, 1.0)
-    rows = [z - v / scale for _, v in speeds] + [z + v / scale for _, v in speeds]
-    b.constrain("impact velocity epigraph", ca.vertcat(*rows), 0.0, np.inf)
-    return Cost(z + _smoothing(g), "m/s", lambda f, r: max(f, 0.0) * impact_speed_scale(r), z)
+    b.constrain("impact velocity epigraph", ca.vertcat(z - speeds / scale, z + speeds / scale), 0.0, np.inf)
+    return Cost(z + _smoothing(g), "m/s", lambda f, r: max(f, 0.0) * _impact_speed_scale(r), z)
+
+
+def _impact_speed_scale(req) -> float:
+    """The speed the impact velocity is measured against in the NLP: the largest mean speed of the moves that close
+    the impact contact [m/s]."""
+    return max((abs(mv.stroke) / mv.duration for mv in req.moves if req.contact.closes_impact(mv)), default=1.0)
 
 
 @dataclass(frozen=True)

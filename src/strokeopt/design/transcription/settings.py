@@ -8,6 +8,7 @@ section's :class:`~strokeopt.io.fields.Fields`; unknown keys are errors.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 
 from ...drive.transmission import TEETH_RANGE
@@ -97,6 +98,9 @@ class DesignSettings:
     #: ``monotonic``: every move keeps its direction (its speed never changes sign: a crank that turns one way, a
     #: follower that does not turn back inside a move), held everywhere (Bernstein hull of the speed)
     monotonic: bool = False
+    #: the ``[design.free.<name>]`` entries the collocation does not carry (:class:`OuterFree`, at most one): searched
+    #: around the verified solve (studies/outer.py)
+    outer: tuple = ()
 
     @property
     def mesh(self) -> Mesh:
@@ -187,7 +191,7 @@ def parse_design(f, *, file: str = "", rotary: bool = False) -> DesignSettings:
         if problem is not None:
             raise solver.error(*problem)
     contact = parse_contact(f.table("contact", required=False))
-    free = parse_free(f.table("free", required=False))
+    free, outer = parse_free(f.table("free", required=False))
     pull_out = f.boolean("enforce_pull_out", True)
     prune_catalogue = f.boolean("prune_catalogue", True)
     cam_tables = _read_cam_tables(f)
@@ -200,7 +204,7 @@ def parse_design(f, *, file: str = "", rotary: bool = False) -> DesignSettings:
     return DesignSettings(objective, n, d, rest, jerk, from_law, accuracy, motor_choice, pulley, zmin, zmax,
                           check_points, check_tol, refinements, pulley_inertia, options, contact, free, pull_out,
                           reserve, law_spm, prune_catalogue=prune_catalogue, cam_tables=cam_tables, lengthen=lengthen,
-                          monotonic=monotonic)
+                          monotonic=monotonic, outer=outer)
 
 
 #: The cam-table formats of controllers strokeopt writes (files/cam_formats.py holds what each is).
@@ -229,14 +233,44 @@ def _dotted(prefix: str, table: dict) -> dict:
     return out
 
 
-def parse_free(f) -> tuple:
-    """Read ``[design.free.<element>]`` tables: ``stiffness_N_m = [lower, upper]`` (element names are checked
-    against the model by design/free.py), and ``[design.free.transmission]``: ``<field> = [lower, upper]`` in the
-    field's unit (checked against the transmission there); returns ``(name, lower, upper)`` per entry, a
-    transmission's named ``transmission.<field>``."""
+#: ``model.springs.X.stiffness_N_m`` / ``model.contacts.X.stiffness_N_m``: a field the collocation carries (free.py)
+_STIFFNESS_FIELD = re.compile(r"^model\.(springs|contacts)\.([A-Za-z0-9_\-]+)\.stiffness_N_m$")
+
+
+@dataclass(frozen=True)
+class OuterFree:
+    """A ``[design.free.NAME]`` the collocation does not carry: one number ``d`` in ``[lower, upper]`` that sets the
+    problem fields of ``moves`` (``(field, coefficient)``): each ``file value + coefficient * d``, or ``d`` itself
+    where ``absolute`` (``field = ...``, ``range = [...]``). Searched around the verified solve (studies/outer.py)."""
+
+    name: str
+    moves: tuple
+    lower: float
+    upper: float
+    absolute: bool = False
+
+    def overrides(self, d: float, nominal: dict) -> list[str]:
+        """The ``--set`` texts at ``d`` (``nominal``: field -> its value in the file)."""
+        return [f"{f}={(d if self.absolute else nominal[f] + c * d)!r}" for f, c in self.moves]
+
+    def describe(self) -> str:
+        if self.absolute:
+            return self.moves[0][0]
+        return ", ".join(f"{f} {c:+g}" for f, c in self.moves) + " per unit"
+
+
+def parse_free(f) -> tuple[tuple, tuple]:
+    """Read ``[design.free.<name>]`` tables: ``stiffness_N_m = [lower, upper]`` (the name an element of the model,
+    checked by design/free.py), ``field = "model.contacts.c32.gap_mm"`` with ``range = [lower, upper]`` in the field's
+    unit, or ``moves = {"model.contacts.c32.gap_mm" = -1.0, "model.contacts.pad.gap_mm" = 1.0}`` with ``range_mm`` (or
+    ``range``) ``= [lower, upper]`` (a coupled move: one number shifting several fields); and
+    ``[design.free.transmission]``: ``<field> = [lower, upper]`` in the field's unit (checked against the
+    transmission there). A spring's or contact's stiffness is a variable of the collocation; any other field is
+    searched around the solve (:class:`OuterFree`, at most one). Returns ``(collocation entries (name, lower,
+    upper), searched entries)``, a transmission's named ``transmission.<field>``."""
     if f is None:
-        return ()
-    out = []
+        return (), ()
+    out, outer = [], []
     for name in list(f.data):
         t = f.table(name)
         if name == "transmission":
@@ -247,14 +281,54 @@ def parse_free(f) -> tuple:
                 out.append((f"transmission.{key}", lo, hi))
             t.finish()
             continue
-        lo, hi = _bounds(t, "stiffness_N_m", "in N/m")
+        forms = [k for k in ("stiffness_N_m", "field", "moves") if t.has(k)]
+        if len(forms) != 1:
+            raise t.error("", "needs one of: stiffness_N_m = [lower, upper] (the element's stiffness); field = \"PATH\" "
+                              "with range = [lower, upper]; moves = {PATH = coefficient, ...} with range_mm = [lower, "
+                              "upper]" + (f" (it has {', '.join(forms)})" if forms else ""))
+        if forms[0] == "moves":
+            moves = t.raw("moves")
+            if not isinstance(moves, dict) or not moves or not all(
+                    isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c) and c != 0
+                    for c in moves.values()):
+                raise t.error("moves", f"needs {{PATH = coefficient, ...}}, each coefficient a non-zero number, got "
+                                       f"{moves!r}")
+            key = "range_mm" if t.has("range_mm") else "range"
+            lo, hi = _range(t, key)
+            outer.append(OuterFree(name, tuple((str(p), float(c)) for p, c in moves.items()), lo, hi))
+            t.finish()
+            continue
+        if forms[0] == "field":
+            path = t.string("field")
+            lo, hi = _range(t, "range")
+            m = _STIFFNESS_FIELD.match(path)
+            if m is None:
+                outer.append(OuterFree(name, ((path, 1.0),), lo, hi, absolute=True))
+                t.finish()
+                continue
+            element = m.group(2)
+            key = "range"
+        else:
+            element, key = name, "stiffness_N_m"
+            lo, hi = _bounds(t, key, "in N/m")
         # a stiffness of 1 N/m (a hair spring) to 1e9 N/m (a penalty contact); equal bounds fix it there
         if not (1.0 <= lo <= hi <= 1e9):
-            raise t.error("stiffness_N_m", f"bounds [{lo:g}, {hi:g}] must satisfy 1 <= lower <= upper <= 1e9 (N/m)")
+            raise t.error(key, f"bounds [{lo:g}, {hi:g}] must satisfy 1 <= lower <= upper <= 1e9 (N/m)")
         t.finish()
-        out.append((name, lo, hi))
+        out.append((element, lo, hi))
     f.finish()
-    return tuple(out)
+    if len(outer) > 1:
+        raise f.error(outer[1].name, f"one [design.free] entry outside the collocation is searched around the solve; "
+                                     f"this file has {len(outer)}: {', '.join(o.name for o in outer)} (free a spring's "
+                                     "stiffness in the collocation, or fix all but one)")
+    return tuple(out), tuple(outer)
+
+
+def _range(t, key: str) -> tuple[float, float]:
+    lo, hi = _bounds(t, key, "in the field's unit")
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise t.error(key, f"bounds [{lo:g}, {hi:g}] must be finite with lower < upper")
+    return lo, hi
 
 
 def _bounds(t, key: str, unit: str) -> tuple[float, float]:
