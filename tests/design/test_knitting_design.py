@@ -175,6 +175,7 @@ def test_size_with_a_servo_motor_on_the_screw_lever(capsys):
     assert code == 0 and "Traceback" not in err and "055U2B30 with the screw_lever ranks first" in out
 
 
+@pytest.mark.slow  # a knitting solve and its report: about 6 s
 def test_the_report_of_a_design_that_exceeds_a_limit_is_written_and_exits_1(capsys, tmp_path):
     # it wrote the page and exited 0 ("limits exceeded" only inside): every command exits 1 when the design fails
     page = tmp_path / "r.html"

@@ -272,6 +272,7 @@ def test_out_never_writes_over_the_design_or_another_file(reference_written, tmp
     assert "give --out FILE" in capsys.readouterr().err
 
 
+@pytest.mark.slow  # two table checks with their re-simulations: about 5 s
 def test_check_file_judges_a_table_edited_by_hand(reference_written, tmp_path, capsys):
     # one point of an xyva table moved by 0.05 deg of motor: about 10 um at the bar (24-tooth pulley, r 11.46 mm)
     design = str(reference_written.out / "design.json")

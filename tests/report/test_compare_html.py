@@ -104,6 +104,7 @@ def test_compare_needs_two_designs_and_says_which_file_is_bad(two_designs, capsy
     assert not (tmp_path / "c.html").exists()
 
 
+@pytest.mark.slow  # two compare pages of the solved designs: about 10 s
 def test_a_design_compared_with_itself_is_said(two_designs, capsys, tmp_path):
     # the same file twice, and a copy of it: their columns are identical, and compare says so before the work
     import shutil
