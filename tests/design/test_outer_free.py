@@ -4,9 +4,7 @@ coupled move: the impact point), read and checked with the file, searched around
 
 from __future__ import annotations
 
-import math
-from dataclasses import replace
-from types import SimpleNamespace
+from dataclasses import dataclass, replace
 
 import pytest
 
@@ -74,6 +72,23 @@ def test_only_the_verified_solve_searches_it(tmp_path, reference_path):
         solve_verified(load_problem(bad))
 
 
+@dataclass(frozen=True)
+class _Design:  # what solve_outer reads of a design
+    objective_value: float
+    d: float
+    objective: str = "min_impact_velocity"
+    objective_unit: str = "m/s"
+    free_parameters: tuple = ()
+    notes: tuple = ()
+
+
+@dataclass(frozen=True)
+class _Verified:
+    design: _Design
+    ok: bool
+    verdict: str
+
+
 def _fake(problem, outer, f, fails=lambda d: False):
     """solve_outer on the problem with a solve whose objective is ``f(d)`` (``fails(d)``: the design fails)."""
     calls = []
@@ -82,19 +97,13 @@ def _fake(problem, outer, f, fails=lambda d: False):
         d = float(next(o.split("=")[1] for o in point.overrides if o.startswith("model.contacts.pad.gap_mm"))) - 23.0
         calls.append((d, warm is not None))
         assert inner.outer == ()
-        design = SimpleNamespace(objective_value=f(d), objective="min_impact_velocity", objective_unit="m/s",
-                                 free_parameters=[], notes=[], d=d)
-        return SimpleNamespace(design=design, ok=not fails(d), verdict=f"fails at {d:g}")
+        return _Verified(_Design(f(d), d), not fails(d), f"fails at {d:g}")
 
     settings = replace(problem.design, outer=(outer,))
     return solve_outer(problem, settings, solve), calls
 
 
-def test_the_search_finds_the_best_point_and_says_what_binds_it(tmp_path, reference_path, monkeypatch):
-    import strokeopt.studies.outer as outer_module
-
-    monkeypatch.setattr(outer_module, "replace", lambda obj, **kw: SimpleNamespace(**{**vars(obj), **kw})
-                        if isinstance(obj, SimpleNamespace) else replace(obj, **kw))
+def test_the_search_finds_the_best_point_and_says_what_binds_it(tmp_path, reference_path):
     p = load_problem(_file(tmp_path, reference_path, IMPACT_POINT))
     o = p.design.outer[0]
     found, calls = _fake(p, o, lambda d: (d - 2.3) ** 2 + 0.5)
@@ -115,7 +124,6 @@ def test_the_search_finds_the_best_point_and_says_what_binds_it(tmp_path, refere
     with pytest.raises(SolverError, match="no value of design.free.impact_point in \\[0, 5\\] gives a design that "
                                           "passes"):
         _fake(p, o, lambda d: 1.0, fails=lambda d: True)
-    assert math.isfinite(found.design.objective_value)
 
 
 @pytest.mark.slow  # 14 verified points, two starts each: about a minute

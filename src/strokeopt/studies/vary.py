@@ -47,7 +47,6 @@ def parse_vary(texts, problem, option: str = "--vary") -> list[Vary]:
     the file's value); several move together, step by step (a coupled move: ``--vary model.contacts.c32.gap_mm-=0:5:1
     --vary model.contacts.pad.gap_mm+=0:5:1`` moves the impact point), so they must have as many values each. The
     field must be a number of the problem and every value one the problem file accepts (ProblemError naming it)."""
-
     out = []
     for text in texts:
         m = _VARY.match(str(text))
