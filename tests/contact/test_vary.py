@@ -69,6 +69,9 @@ def test_each_step_is_the_problem_with_its_set_texts(problem):
     (["model.contacts.c32.gap_mm=1:2:0.5", "model.contacts.pad.gap_mm=1:2:1"], "need as many values each"),
     (["model.contacts.c32.gap_mm=1", "model.contacts.c32.gap_mm=2"], "names a field twice"),
     (["problem.name=1"], "is 'DECO 2000 upper needle bar', not a number"),
+    # the rate is the run's: a step cannot change it (each row would be simulated at --spm all the same)
+    (["machine.spm=500:700:100"], "machine.spm: the rate is the run's: sweep it with --spm START:STOP:STEP"),
+    (["model.springs.k2.damping_N_s_m*=1:2:0.5"], "FIELD+=..., FIELD-=... shift the file's value; no other operator"),
 ])
 def test_bad_vary_is_refused_naming_the_field(reference_path, capsys, vary, words):
     args = ["simulate", str(reference_path), "--plot", "none"]
@@ -105,3 +108,16 @@ def test_a_designs_stroke_over_the_values(reference_path, reference_written, cap
     assert [r["varied"]["model.springs.k2.stiffness_N_m"] for r in rows] == [900.0, 1200.0]
     assert all(r["stroke"].startswith("optimal") for r in rows)  # the design's stroke, not the file's law
     assert rows[0]["impact_velocity_m_s"] != rows[1]["impact_velocity_m_s"]
+
+
+def test_an_element_of_a_force_laws_coefficients(reference_path, capsys):
+    # the pad's law F = c1 x + c3 x^3: its linear coefficient c1 (element 2 of coefficients_SI, 1-based as --set)
+    args = ["simulate", str(reference_path), "--spm", "600", "--plot", "none", "--json", "--workers", "1",
+            "--vary", "model.force_laws.pad_65ShA.coefficients_SI[2]=3e5:6e5:3e5"]
+    assert main(args) == 0
+    rows = json.loads(capsys.readouterr().out)["rows"]
+    assert [r["varied"]["model.force_laws.pad_65ShA.coefficients_SI[2]"] for r in rows] == [3e5, 6e5]
+    assert rows[0]["peak_pad_force_N"] < rows[1]["peak_pad_force_N"]  # a stiffer pad pushes back harder
+    # the element is checked as the file checks the law: c_0 (element 1) must stay 0
+    assert main(args[:-1] + ["model.force_laws.pad_65ShA.coefficients_SI[1]=1:2:1"]) == 2
+    assert "c_0 must be 0" in capsys.readouterr().err

@@ -288,7 +288,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="'tolerance': error of impact velocity and release angle against a tight reference vs CPU "
                         "time, over tolerances and smoothing widths")
     p.add_argument("--vary", action="append", default=[], metavar="FIELD=START:STOP:STEP",
-                   help="simulate the scene at one rate over values of a number of the problem (a --set path: "
+                   help="simulate the scene at one rate over values (or one VALUE) of a number of the problem (a --set path: "
                         "model.contacts.c32.gap_mm=5:7.4:0.2, model.bodies.control.mass_g=35:50:5) and print a "
                         "table and a figure of its results; FIELD+=... / FIELD-=... shift the file's value; several "
                         "--vary move together step by step (the impact point: --vary model.contacts.c32.gap_mm-=0:5:1 "

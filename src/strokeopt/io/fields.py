@@ -209,8 +209,18 @@ def apply_overrides(data: dict, overrides: list[str], file: str) -> frozenset:
                                        f"{did_you_mean(seg, node) if isinstance(node, dict) else ''}")
                 node = node[seg]
         last = path[-1]
+        if isinstance(last, int) and isinstance(node, list):  # one element of an array of numbers or texts
+            if not 1 <= last <= len(node):
+                raise ProblemError(file, _format_path(path), f"--set {text}: {missing_element(last, node)}")
+            if value is REMOVE or isinstance(node[last - 1], (dict, list)):
+                raise ProblemError(file, _format_path(path), f"--set {text}: an element of an array of numbers or "
+                                                             "texts is set to a value (to remove one, set the array)")
+            node[last - 1] = value
+            done.add(_format_path(path[:-1]))  # the array holds a value from --set
+            continue
         if isinstance(last, int) or not isinstance(node, dict):
-            raise ProblemError(file, _format_path(path), f"--set {text}: can only set a field of a table")
+            raise ProblemError(file, _format_path(path), f"--set {text}: can only set a field of a table or an "
+                                                         "element of an array")
         if value is REMOVE:
             if last not in node:
                 raise ProblemError(file, _format_path(path), f"--set {text}: the problem has no such field to remove"

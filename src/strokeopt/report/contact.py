@@ -249,7 +249,7 @@ def plot_sweep(rows: list[dict], path=None, cycle=STITCH, varied: str | None = N
     if onset is not None or lagging:
         axes[0].legend(fontsize=8, loc="best")  # named in a legend placed clear of the curve
     axes[1].set_xlabel((label or varied) if varied else f"{cycle.rate_name} [{cycle.rate_unit}]")
-    what = f"{varied} varied at {cycle.rate(rows[0]['spm'])}" if varied and rows else "speed sweep"
+    what = f"{label or varied} varied at {cycle.rate(rows[0]['spm'])}" if varied and rows else "speed sweep"
     axes[0].set_title(f"scene {rows[0]['scene']}, {rows[0].get('stroke') or 'stroke'}: {what}" if rows else what)
     if path is not None:
         from .figures import fit_titles

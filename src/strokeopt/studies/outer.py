@@ -5,8 +5,8 @@ The impact point of the needle bar (gap N smaller and the pad's gap H larger by 
 moves where the stroke meets the stop: a pinned position of the collocation, not one of its variables. So the
 number is searched around the whole verified solve (:func:`~.verified.solve_verified`: the design, the full servo
 simulation, the contact scene): a scan of ``[lower, upper]``, then golden-section search around its best point to
-:data:`TOLERANCE` of the range, each point the problem with that value's ``--set`` texts solved (from two starts:
-:func:`solve_outer`) and judged. A point whose
+:data:`TOLERANCE` of the range, each point the problem with that value's ``--set`` texts solved and judged (:func:`solve_outer`
+says why the scan is printed with the answer). A point whose
 design fails (no stroke meets the limits, or the scene's criteria fail: a premature release, a lag) counts as
 infinitely bad, so the search closes in on the best point that passes; the answer names what stops it going
 further (the criterion that fails next to it, or the range's bound). A spring's stiffness freed at the same time
@@ -39,39 +39,36 @@ def solve_outer(problem, settings, solve, progress=None):
     the outer entry, ``warm`` a design to start from or None). ``progress``: a callable wrapping an iterable (tqdm),
     advanced once per point.
 
-    The solve of one point is a local optimum of a non-convex NLP (the stroke's shape, the crossing of the stop):
-    from the classic law and from the best design so far its values can differ by a fifth (the impact velocity at
-    a 3 mm shift: 0.706 and 0.553 m/s). Each point is solved from both and keeps the better; the range is first
-    scanned on :data:`SCAN_POINTS` points, then the bracket around the best narrowed by golden section."""
+    Each point is the solve a user gets for that value (``strokeopt solve`` with its ``--set`` texts, from the same
+    start), so the answer can be solved again from design.json. That solve is a local optimum of a non-convex NLP
+    (the stroke's shape, the crossing of the stop): from another start its value can differ by a fifth or more (the
+    impact velocity at a 3 mm shift: 0.706 m/s from the classic law, 0.553 m/s warm-started from a neighbouring
+    design), and nearby values can fall into different optima. So the range is first scanned on
+    :data:`SCAN_POINTS` points (printed with the answer), then the bracket around the best narrowed by golden
+    section."""
     outer = settings.outer[0]
     inner = replace(settings, outer=())
     where = f"design.free.{outer.name}"
     nominal = {f: number_in(problem.data, f, problem.file, where) for f, _ in outer.moves}
     for bound in (outer.lower, outer.upper):  # both ends must be problems the file accepts
+        sets = outer.overrides(bound, nominal)
         try:
-            problem.with_overrides(outer.overrides(bound, nominal))
+            problem.with_overrides(sets)
         except ProblemError as exc:
             raise ProblemError(str(problem.file), f"{where}.{'range' if outer.absolute else 'range_mm'}",
-                               f"at {bound:g} the problem refuses it: {exc.message}") from None
+                               f"at {bound:g} ({_said(sets)}) the problem refuses {exc.field}: {exc.message}"
+                               ) from None
     points: dict[float, tuple] = {}
     bar = iter(progress(iter(int, 1))) if progress is not None else None  # an endless iterator advanced per point
 
-    def incumbent():
-        done = [v for v in points.values() if v[1] is not None and math.isfinite(v[0])]
-        return min(done, key=lambda v: v[0])[1].design if done else None
-
     def at(d: float):
         if d not in points:
-            point = problem.with_overrides(outer.overrides(d, nominal))
-            tries = []
-            for warm in (None, incumbent()) if incumbent() is not None else (None,):
-                try:
-                    verified = solve(point, inner, warm)
-                    tries.append((verified.design.objective_value if verified.ok else math.inf, verified,
-                                  None if verified.ok else verified.verdict))
-                except (SolverError, ProblemError) as exc:
-                    tries.append((math.inf, None, str(exc)))
-            points[d] = min(tries, key=lambda t: t[0])
+            try:
+                verified = solve(problem.with_overrides(outer.overrides(d, nominal)), inner, None)
+                points[d] = (verified.design.objective_value if verified.ok else math.inf, verified,
+                             None if verified.ok else verified.verdict)
+            except (SolverError, ProblemError) as exc:
+                points[d] = (math.inf, None, str(exc))
             if bar is not None:
                 next(bar, None)
         return points[d][0]
@@ -96,7 +93,12 @@ def solve_outer(problem, settings, solve, progress=None):
         failed = "; ".join(f"{x:g}: {points[x][2]}" for x in sorted(points))
         raise SolverError(f"no value of {where} in [{lo:g}, {hi:g}] gives a design that passes "
                           f"({len(points)} tried): {failed[:600]}")
-    return _with_outer(verified, outer, best, points, scan)
+    return _with_outer(verified, outer, best, points, scan, outer.overrides(best, nominal))
+
+
+def _said(sets: list) -> str:
+    """``--set`` texts as words: ``model.contacts.c32.gap_mm = 2.421, ...``."""
+    return ", ".join(f"{t.split('=')[0]} = {float(t.split('=')[1]):.4g}" for t in sets)
 
 
 def _binds(outer, best: float, points: dict, unit: str) -> str:
@@ -115,14 +117,14 @@ def _binds(outer, best: float, points: dict, unit: str) -> str:
     return "the points tried beside it are worse: " + "; ".join(said(x) for x in beside)
 
 
-def _with_outer(verified, outer, best: float, points: dict, scan: list):
+def _with_outer(verified, outer, best: float, points: dict, scan: list, sets: list):
     design = verified.design
     what = outer.describe()
     unit = design.objective_unit
     scanned = ", ".join(f"{x:g}: " + (f"{points[x][0]:.4g}" if math.isfinite(points[x][0]) else "fails") for x in scan)
     row = {"parameter": f"design.free.{outer.name} ({what})", "value": best, "lower": outer.lower,
            "upper": outer.upper, "at_bound": "lower" if best == outer.lower else "upper" if best == outer.upper else None}
-    note = (f"design.free.{outer.name} = {best:.4g} chosen in [{outer.lower:g}, {outer.upper:g}] ({what}) by "
+    note = (f"design.free.{outer.name} = {best:.4g} chosen in [{outer.lower:g}, {outer.upper:g}] ({_said(sets)}) by "
             f"a scan and golden-section search over {len(points)} verified points (scan, {design.objective} {unit}: "
             f"{scanned}); what binds it: {_binds(outer, best, points, unit)}")
     design = replace(design, free_parameters=[*design.free_parameters, row], notes=[*design.notes, note])

@@ -20,7 +20,9 @@ from ..io.ranges import parse_range
 from .runner import run_study
 
 #: ``FIELD=A:B:STEP`` (the values), ``FIELD+=A:B:STEP`` / ``FIELD-=A:B:STEP`` (added to / taken from the file's value)
-_VARY = re.compile(r"^\s*(?P<field>[^=+\-\s][^=]*?)\s*(?P<op>\+=|-=|=)\s*(?P<values>\S.*?)\s*$")
+_VARY = re.compile(r"^\s*(?P<field>[A-Za-z_][\w.\[\]\-]*?)\s*(?P<op>\+=|-=|=)\s*(?P<values>\S.*?)\s*$")
+#: Fields a step cannot take: the rate is the run's (``--spm``; a sweep of rates is ``--spm START:STOP:STEP``)
+_NOT_VARIED = {"machine.spm": "the rate is the run's: sweep it with --spm START:STOP:STEP (or give one --spm)"}
 
 
 @dataclass(frozen=True)
@@ -51,9 +53,12 @@ def parse_vary(texts, problem, option: str = "--vary") -> list[Vary]:
     for text in texts:
         m = _VARY.match(str(text))
         if m is None:
-            raise ProblemError(option, str(text), "expected FIELD=START:STOP:STEP (or FIELD+=..., FIELD-=... for a shift "
-                                                  "of the file's value), e.g. 'model.contacts.c32.gap_mm=5:7.4:0.2'")
+            raise ProblemError(option, str(text), "expected FIELD=START:STOP:STEP or FIELD=VALUE (FIELD+=..., FIELD-=... "
+                                                  "shift the file's value; no other operator), e.g. "
+                                                  "'model.contacts.c32.gap_mm=5:7.4:0.2'")
         field = m["field"]
+        if field in _NOT_VARIED:
+            raise ProblemError(option, field, _NOT_VARIED[field])
         nominal = number_in(problem.data, field, problem.file, option)
         values = parse_range(m["values"], f"{option} {field}", "VALUE")
         out.append(Vary(field, tuple(values), nominal, {"=": 0, "+=": 1, "-=": -1}[m["op"]]))

@@ -293,8 +293,10 @@ def parse_free(f) -> tuple[tuple, tuple]:
                     for c in moves.values()):
                 raise t.error("moves", f"needs {{PATH = coefficient, ...}}, each coefficient a non-zero number, got "
                                        f"{moves!r}")
-            key = "range_mm" if t.has("range_mm") else "range"
-            lo, hi = _range(t, key)
+            if not (t.has("range_mm") or t.has("range")):
+                raise t.error("range_mm", "is required: the bounds [lower, upper] of the shift, in mm (range_mm) or in "
+                                          "the fields' unit (range)")
+            lo, hi = _range(t, "range_mm" if t.has("range_mm") else "range")
             outer.append(OuterFree(name, tuple((str(p), float(c)) for p, c in moves.items()), lo, hi))
             t.finish()
             continue
