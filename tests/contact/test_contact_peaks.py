@@ -15,7 +15,7 @@ import pytest
 from strokeopt import ProblemError, SimulationOptions, SolverError, load_problem, simulate_scene
 from strokeopt.cli.main import main
 
-REFERENCE = SimulationOptions(rtol=1e-10, atol=1e-11)  # the issue's reference (atol = rtol / 10)
+REFERENCE = SimulationOptions(rtol=1e-10, atol=1e-11, estimate=False)  # the reference (atol = rtol / 10), not estimated
 
 # Brute force: the release scene at 500 spm integrated at rtol 1e-10, atol 1e-11 on 200 000 output points per
 # stroke piece (0.07-0.6 us apart), each peak the vertex of the parabola through its largest sample (N).
@@ -49,7 +49,7 @@ def release_default(problem):
 
 @pytest.fixture(scope="module")
 def release_500(problem, release_default):
-    """The release scene at the default tolerance and at rtol 1e-10 (its peaks estimated at 1e-12: 5-8 s)."""
+    """The release scene at the default tolerance and at rtol 1e-10 (the reference: its peaks located, not estimated)."""
     return release_default, simulate_scene(problem, "release", 500, options=REFERENCE)
 
 

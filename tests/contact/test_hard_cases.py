@@ -3,7 +3,8 @@
 Two properties at every tolerance:
 
 * **Honest peaks.** Every peak force marked converged is within 1 % of the same scene at rtol 1e-10 (the
-  reference; for the 1200 spm handover, rtol 1e-8); a peak that is not within 1 % is marked not converged.
+  reference, its peaks located but not estimated: ``SimulationOptions(estimate=False)``; for the 1200 spm handover,
+  rtol 1e-8); a peak that is not within 1 % is marked not converged.
   At rtol 1e-8 every peak converges (the estimate does not hide behind "not converged").
 * **Bounded runs.** A scene ends within its step budget, or is refused naming its stiffest contact: the
   budget grows at most 4x from the default to a tight tolerance, and one output interval may take at most a
@@ -29,7 +30,7 @@ REFERENCE_FILE = "deco2000_needle_bar.toml"
 KNITTING_FILE = "knitting_stitch_density.toml"
 DEFAULT = SimulationOptions()
 TIGHT = SimulationOptions(rtol=1e-8, atol=1e-9)
-REFERENCE = SimulationOptions(rtol=1e-10, atol=1e-11)
+REFERENCE = SimulationOptions(rtol=1e-10, atol=1e-11, estimate=False)  # the reference: its peaks located, not estimated
 CONTACTS = ("c21", "c32", "c13", "c31", "c14", "c45", "c56", "c35")
 
 # name, file, scene, spm (None: the file's), overrides, reference options (None: TIGHT is the reference)
@@ -57,15 +58,12 @@ REFUSED = [
     ("contacts x1000", "handover", None, [f"model.contacts.{c}.stiffness_N_m=1e12" for c in CONTACTS]),
     ("contacts x1000, 1200 spm", "handover", 1200, [f"model.contacts.{c}.stiffness_N_m=1e12" for c in CONTACTS]),
     ("contacts x100", "handover", 600, [f"model.contacts.{c}.stiffness_N_m=1e11" for c in CONTACTS]),
-    # the needle clamped between its two rollers (both gaps zero) chatters at 1e9 N/m for the whole cycle
-    ("needle clamped, gaps c45 and c56 zero", "handover", 600,
-     ["model.contacts.c45.gap_mm=0.0", "model.contacts.c56.gap_mm=0.0"]),
 ]
 
 def _peaks(r):
     m = r.metrics
     values = {**m["peak_contact_forces_N"], "drive": m["peak_drive_force_N"]}
-    errors = {**m["peak_contact_force_errors_pct"], "drive": m["peak_drive_force_error_pct"]}
+    errors = {**(m["peak_contact_force_errors_pct"] or {}), "drive": m["peak_drive_force_error_pct"]}  # None: not estimated
     return values, errors, {k: k not in m["unconverged_peaks"] for k in values}
 
 
@@ -76,8 +74,9 @@ def test_hard_case_peaks_honest_events_agree_steps_bounded(reference_path, case)
     p = load_problem(reference_path.parent / file, overrides)
     runs = {o.rtol: simulate_scene(p, scene, spm, options=o) for o in (DEFAULT, TIGHT, reference_options) if o}
     reference = runs[(reference_options or TIGHT).rtol]
-    ref, _, ref_converged = _peaks(reference)
-    assert all(ref_converged.values()), "the reference run's own peaks must converge"
+    ref, _, _ = _peaks(reference)
+    if reference_options is None:  # rtol 1e-8 as the reference: its own estimates hold it
+        assert reference.metrics["peak_forces_converged"] is True
     print(f"\n{name}: peak forces [N] against the reference, estimate and error [%]")
     for options in (DEFAULT, TIGHT) if reference_options else (DEFAULT,):
         values, errors, converged = _peaks(runs[options.rtol])

@@ -367,8 +367,9 @@ def scene_peaks(sc, ode, result, Z, S, P, stepper) -> dict:
         width = S[i + 1] - S[i]
         return z, (S[first] - S[i]) / width, (S[last] - S[i]) / width
 
+    estimate = window is not None and getattr(getattr(stepper, "opts", None), "estimate", True)
     peaks, refined = locate_peaks(result.t, grid, quantities, impulses, (len(quantities) - 1, on_driven), refine,
-                                  may_act, jumps, carry=carry if window is not None else None)
+                                  may_act, jumps, carry=carry if estimate else None)
     result.stats["peak_refinements"] = refined
     return {q.name if i < len(sc.elements) else None: p for i, (q, p) in enumerate(zip(quantities, peaks))}
 
