@@ -9,9 +9,8 @@ import numpy as np
 import pytest
 
 from strokeopt import ProblemError, SolverError, load_problem
-from strokeopt.design.transcription.collocation import Mesh, MoveSolution
+from strokeopt.design.transcription.collocation import Mesh
 from strokeopt.design.compare import compare_with_laws
-from strokeopt.design.transcription.settings import DesignSettings
 from strokeopt.design.solve import solve_design
 from strokeopt.studies.sweeps import fastest_feasible, sweep_design
 from strokeopt.files.design_file import read_design

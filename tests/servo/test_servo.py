@@ -13,7 +13,7 @@ import pytest
 from strokeopt import ProblemError, SolverError
 from strokeopt.servo.accuracy import handover_accuracy, residual_vibration_table
 from strokeopt.servo.loop import build_loop, loop_margins, simulate_loop, tune
-from strokeopt.servo.plant import DriveAxis, axis_from_problem, belt_stiffness
+from strokeopt.servo.plant import axis_from_problem, belt_stiffness
 from strokeopt.servo.settings import ServoSettings
 
 
@@ -149,7 +149,6 @@ def test_belt_stiffness_of_the_two_belt_pieces():
 
 def test_axis_of_the_reference_problem(setup):
     _, _, axis, _ = setup
-    assert isinstance(axis, DriveAxis)
     # rotor 0.23 kg cm^2 + pulley 0.016 kg cm^2 (digest A.5, Tab. 4.4)
     assert axis.motor_inertia == pytest.approx(0.246e-4)
     assert axis.radius == pytest.approx(26.738e-3 / 2, rel=1e-4)
@@ -163,7 +162,8 @@ def test_residual_vibration_by_law(reference, setup):
     rows = {r["law"].split(" ")[0]: r for r in residual_vibration_table(problem, 600, settings=settings)}
     assert set(rows) == {"parabolic", "cubic", "cosine", "modified_sine", "sine", "poly5", "poly7", "modified_trapezoid"}
     for r in rows.values():
-        assert math.isfinite(r["handover_error_mm"]) and r["residual_vibration_mm"] >= 0
+        # finite, and a belt mode that rings: every law leaves some residual vibration (a max |x|, never negative)
+        assert math.isfinite(r["handover_error_mm"]) and 0 < r["residual_vibration_mm"] < 0.5
     jumps = [rows[k]["residual_vibration_mm"] for k in ("parabolic", "cubic", "cosine")]
     smooth = [rows[k]["residual_vibration_mm"] for k in ("modified_sine", "sine", "poly5", "poly7", "modified_trapezoid")]
     assert min(jumps) > max(smooth), (jumps, smooth)

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from strokeopt.servo import loop as servo_loop
-from strokeopt.servo.lti import (StateSpace, expm, forced_response, linear_recurrence, pade, pade_delay,
-                                 periodic_steady_state, stability_margins)
+from strokeopt.servo.lti import (expm, forced_response, linear_recurrence, pade, pade_delay,
+                                 periodic_steady_state)
 from strokeopt.servo.plant import axis_from_problem
 
 control = pytest.importorskip("control")

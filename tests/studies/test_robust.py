@@ -8,9 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from strokeopt import load_problem
 from strokeopt.cli.main import main
-from strokeopt.studies.robust import parse_tolerance, robust_study, wilson_interval
+from strokeopt.studies.robust import parse_tolerance, wilson_interval
 
 REFERENCE = Path(__file__).resolve().parents[2] / "problems" / "deco2000_needle_bar.toml"
 K2 = "model.springs.k2.stiffness_N_m"

@@ -50,7 +50,7 @@ class SimulationOptions:
         for name in ("rtol", "atol", "resolution_deg"):
             value, (lo, hi) = getattr(self, name), TOLERANCE_RANGES.get(name, (0.0, math.inf))  # scene.py: why
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0 and lo <= value <= hi):
-                raise ProblemError("options", name, f"must be a positive number" + (
+                raise ProblemError("options", name, "must be a positive number" + (
                     f" in [{lo:g}, {hi:g}]" if name in TOLERANCE_RANGES else "") + f", got {value!r}")
         if not (math.isfinite(self.smoothing) and self.smoothing >= 0):
             raise ProblemError("options", "smoothing", f"must be zero (hard switches) or positive, got {self.smoothing!r}")

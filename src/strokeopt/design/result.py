@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -17,6 +17,9 @@ from .transcription.collocation import Mesh, MoveSolution, fine_grid, move_piece
 from ..drive.selection import resolve_drive
 from ..io.load_units import from_load_units, to_load_units
 from ..motion.stroke import StrokeFunction, dwell_piece
+
+if TYPE_CHECKING:
+    from .transcription.request import Move
 
 
 def stroke_from_solutions(problem, spm: float, solutions: list[MoveSolution], label: str = "optimal") -> StrokeFunction:

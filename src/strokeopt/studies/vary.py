@@ -39,10 +39,6 @@ class Vary:
         v = self.values[k]
         return v if self.sign == 0 else self.nominal + self.sign * v
 
-    @property
-    def label(self) -> str:
-        return self.field if self.sign == 0 else f"{self.field} {'+' if self.sign > 0 else '-'} shift"
-
 
 def parse_vary(texts, problem, option: str = "--vary") -> list[Vary]:
     """The ``--vary`` options: each ``FIELD=A:B:STEP`` (or one value), ``FIELD+=...`` or ``FIELD-=...`` (a shift of

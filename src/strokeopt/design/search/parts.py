@@ -28,7 +28,7 @@ def choose_parts(req: SolveRequest, progress=None):
     every bound left; a motor's continuous-radius optimum is a lower bound of its tooth-count optima, so a
     motor whose continuous optimum is no better than the best design found is not solved for tooth counts.
     """
-    problem, spm, settings = req.problem, req.spm, req.settings
+    spm, settings = req.spm, req.settings
     if not (needs_terms(req.objective) or req.enforce_accuracy):
         req = replace(req, error_terms=())  # the handover accuracy is checked at the chosen design (solve.py)
     notes = []
